@@ -1,0 +1,110 @@
+#include "src/cli/app.h"
+
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "src/core/error.h"
+#include "src/core/log.h"
+#include "src/core/version.h"
+
+namespace pano4d::cli {
+namespace {
+
+// Stages of the blueprint that this build does not have yet. They are
+// registered so that `pano4d --help` shows the whole workflow, and each says
+// in one line that it is not built (exit status 2).
+struct PlannedCommand {
+  const char* name;
+  const char* description;
+};
+
+const std::vector<PlannedCommand> kPlannedCommands = {
+    {"sfm", "Camera poses and sparse points with COLMAP, from a video, images or known poses"},
+    {"depth", "Per-frame depth: from the dataset, or CPU stereo aligned to the sparse points"},
+    {"fit", "Fit the dynamic 4D Gaussians to the video (with panoramic expansion)"},
+    {"expand", "Run one panoramic expansion step: trajectories, warping, prior, refinement"},
+    {"render", "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
+    {"export", "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
+    {"eval", "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
+    {"synth", "Generate a synthetic dynamic scene with exact ground truth"},
+    {"dataset", "Inspect a dataset (DyCheck iPhone, Nvidia, Kubric-4D, synthetic)"},
+    {"run", "Plan and run every stage on a video, images, workspace or dataset"},
+    {"demo", "The built-in synthetic scene end to end, with a report"},
+    {"make-pairs", "Panoramic-trajectory training pairs for a video prior"},
+};
+
+void AddPlannedCommand(CLI::App& app, const PlannedCommand& command, Action* action) {
+  CLI::App* sub = app.add_subcommand(command.name, command.description);
+  sub->allow_extras();
+  sub->footer("Not built yet in this version of pano4d.");
+  const std::string name = command.name;
+  sub->callback([action, name] {
+    *action = [name] {
+      std::cerr << "pano4d " << name << ": not built yet in pano4d " << kVersion
+                << " (see README.md, \"Subcommands\")\n";
+      return kExitNotBuilt;
+    };
+  });
+}
+
+}  // namespace
+
+int Main(int argc, char** argv) {
+  CLI::App app{
+      "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen regions "
+      "synthesised by panoramic expansion. Extra stages for a COLMAP workflow.",
+      "pano4d"};
+  app.set_version_flag("--version", std::string("pano4d ") + kVersion);
+  app.require_subcommand(0, 1);
+  app.footer("Exit status: 0 ok, 1 error (the message names the input), 2 not built yet, "
+             "64 usage error.");
+
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "debug, info, warning or error")
+      ->check(CLI::IsMember({"debug", "info", "warning", "warn", "error"}))
+      ->capture_default_str();
+  bool verbose = false;
+  bool quiet = false;
+  app.add_flag("-v,--verbose", verbose, "Same as --log-level debug");
+  app.add_flag("-q,--quiet", quiet, "Same as --log-level warning");
+
+  Action action;
+  AddInspectCommand(app, &action);
+  AddBenchCommand(app, &action);
+  for (const PlannedCommand& command : kPlannedCommands) AddPlannedCommand(app, command, &action);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitUsage;
+  }
+
+  SetLogLevel(verbose ? LogLevel::kDebug
+                      : quiet ? LogLevel::kWarning
+                              : ParseLogLevel(log_level).value_or(LogLevel::kInfo));
+  if (!action) {
+    std::cout << app.help();
+    return kExitUsage;
+  }
+  try {
+    return action();
+  } catch (const Error& e) {
+    std::cerr << "pano4d: error: " << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "pano4d: error: " << e.what() << "\n";
+  }
+  return kExitError;
+}
+
+}  // namespace pano4d::cli

@@ -1,0 +1,30 @@
+#pragma once
+
+#include <functional>
+
+namespace CLI {
+class App;
+}
+
+namespace pano4d::cli {
+
+// Exit statuses of the pano4d binary.
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitError = 1,     // bad input, a failed step: the message names the input
+  kExitNotBuilt = 2,  // the subcommand exists in the plan but not in this build
+  kExitUsage = 64,    // unknown flag, missing argument (sysexits' EX_USAGE)
+};
+
+// Parses argv, runs the chosen subcommand, and turns errors into one line on
+// stderr ("pano4d: error: <input>: <problem>") and an exit status.
+int Main(int argc, char** argv);
+
+// A subcommand's parsed options live in its callback; the callback stores
+// the function to run here, and Main runs it after parsing succeeds.
+using Action = std::function<int()>;
+
+void AddInspectCommand(CLI::App& app, Action* action);
+void AddBenchCommand(CLI::App& app, Action* action);
+
+}  // namespace pano4d::cli

@@ -1,0 +1,99 @@
+#include "src/core/file.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <system_error>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+void CheckReadableFile(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) {
+    throw Error::In(path.string(), "does not exist");
+  }
+  if (fs::is_directory(status)) {
+    throw Error::In(path.string(), "is a directory, expected a file");
+  }
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> ReadFileBytes(const fs::path& path) {
+  CheckReadableFile(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw Error::In(path.string(),
+                    std::string("cannot be opened: ") + std::strerror(errno));
+  }
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                  std::istreambuf_iterator<char>());
+  if (in.bad()) throw Error::In(path.string(), "read failed");
+  return bytes;
+}
+
+std::string ReadTextFile(const fs::path& path) {
+  const std::vector<std::uint8_t> bytes = ReadFileBytes(path);
+  return std::string(bytes.begin(), bytes.end());
+}
+
+fs::path TemporaryPathFor(const fs::path& path) {
+  static std::atomic<unsigned> counter{0};
+  const std::string infix = ".tmp." + std::to_string(::getpid()) + "." +
+                            std::to_string(counter.fetch_add(1));
+  fs::path tmp = path;
+  tmp.replace_filename(path.stem().string() + infix + path.extension().string());
+  return tmp;
+}
+
+void WriteAtomically(const fs::path& path,
+                     const std::function<void(const fs::path&)>& write) {
+  if (path.has_parent_path()) EnsureDirectory(path.parent_path());
+  const fs::path tmp = TemporaryPathFor(path);
+  try {
+    write(tmp);
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+      throw Error::In(path.string(), "cannot replace it with " + tmp.string() +
+                                         ": " + ec.message());
+    }
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
+void WriteFileAtomically(const fs::path& path, std::string_view bytes) {
+  WriteAtomically(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out) {
+      throw Error::In(tmp.string(),
+                      std::string("write failed: ") + std::strerror(errno));
+    }
+  });
+}
+
+void EnsureDirectory(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error::In(dir.string(), "cannot create directory: " + ec.message());
+  if (!fs::is_directory(dir)) {
+    throw Error::In(dir.string(), "exists but is not a directory");
+  }
+}
+
+}  // namespace pano4d

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pano4d {
+
+// Whole-file reads that throw pano4d::Error naming the path when the file is
+// missing, is a directory, or cannot be read.
+std::vector<std::uint8_t> ReadFileBytes(const std::filesystem::path& path);
+std::string ReadTextFile(const std::filesystem::path& path);
+
+// The temporary name that WriteAtomically uses for `path`: same directory and
+// extension (encoders such as OpenCV's choose the format by extension), with a
+// process-unique infix, e.g. "frame.png" -> "frame.tmp.1234.7.png".
+std::filesystem::path TemporaryPathFor(const std::filesystem::path& path);
+
+// Writes through `write(tmp)` to a temporary file, then renames it onto
+// `path`, so a reader never sees a half-written file and a killed run leaves
+// the previous version intact. Creates the parent directory. If `write`
+// throws, the temporary is removed and the exception propagates.
+void WriteAtomically(const std::filesystem::path& path,
+                     const std::function<void(const std::filesystem::path&)>& write);
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view bytes);
+
+// Creates `dir` (and parents) or throws an Error naming it.
+void EnsureDirectory(const std::filesystem::path& dir);
+
+}  // namespace pano4d

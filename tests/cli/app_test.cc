@@ -1,0 +1,133 @@
+#include "src/cli/app.h"
+
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "src/core/camera.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d::cli {
+namespace {
+
+struct Result {
+  int status;
+  std::string out;
+  std::string err;
+};
+
+Result RunCli(std::vector<std::string> args) {
+  args.insert(args.begin(), "pano4d");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  ::testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStderr();
+  const int status = Main(static_cast<int>(argv.size()), argv.data());
+  std::cout.flush();
+  std::cerr.flush();
+  Result r{status, ::testing::internal::GetCapturedStdout(),
+           ::testing::internal::GetCapturedStderr()};
+  return r;
+}
+
+int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(CliTest, VersionAndHelp) {
+  const Result version = RunCli({"--version"});
+  EXPECT_EQ(version.status, kExitOk);
+  EXPECT_EQ(version.out, "pano4d 0.1.0\n");
+  const Result help = RunCli({"--help"});
+  EXPECT_EQ(help.status, kExitOk);
+  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
+                           "dataset", "run", "demo", "bench", "make-pairs", "inspect"}) {
+    EXPECT_NE(help.out.find(name), std::string::npos) << name;
+  }
+  const Result bare = RunCli({});
+  EXPECT_EQ(bare.status, kExitUsage);
+}
+
+TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
+  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
+                           "dataset", "run", "demo", "make-pairs"}) {
+    const Result r = RunCli({name, "--workspace", "ws"});
+    EXPECT_EQ(r.status, kExitNotBuilt) << name;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("not built yet"), std::string::npos) << r.err;
+  }
+  for (const char* name : {"render", "stability", "budget"}) {
+    EXPECT_EQ(RunCli({"bench", name}).status, kExitNotBuilt) << name;
+  }
+}
+
+TEST(CliTest, UsageErrorsExitSixtyFour) {
+  EXPECT_EQ(RunCli({"--no-such-flag"}).status, kExitUsage);
+  EXPECT_EQ(RunCli({"inspect"}).status, kExitUsage);  // missing path
+  EXPECT_EQ(RunCli({"bench"}).status, kExitUsage);    // missing bench name
+  EXPECT_EQ(RunCli({"--log-level", "loud", "inspect", "x.png"}).status, kExitUsage);
+}
+
+TEST(CliTest, InspectImageAndCamera) {
+  testing::TempDir dir;
+  WriteImage(dir / "a.png", Image(20, 10));
+  const Result image = RunCli({"inspect", (dir / "a.png").string()});
+  ASSERT_EQ(image.status, kExitOk) << image.err;
+  const Json j = Json::parse(image.out);
+  EXPECT_EQ(j["kind"], "image");
+  EXPECT_EQ(j["width"], 20);
+  EXPECT_EQ(j["height"], 10);
+
+  const Camera camera{CameraModelId::kOpenCV, 640, 480, {800, 800, 320, 240, -0.4, 0, 0, 0}};
+  WriteJson(dir / "cam.json", CameraToJson(camera));
+  const Result cam = RunCli({"inspect", (dir / "cam.json").string()});
+  ASSERT_EQ(cam.status, kExitOk) << cam.err;
+  const Json c = Json::parse(cam.out);
+  EXPECT_EQ(c["model"], "OPENCV");
+  EXPECT_EQ(c["round_trip"]["failures"], 0);
+  EXPECT_LT(c["round_trip"]["max_error_px"].get<double>(), 1e-9);
+}
+
+TEST(CliTest, CorruptInputsGiveOneLineNamingTheFile) {
+  testing::TempDir dir;
+  testing::WriteTruncatedPng(dir / "cut.png");
+  testing::WriteText(dir / "cam.json",
+                     R"({"model": "PINHOLE", "width": "640", "height": 480, "params": [1, 1, 1, 1]})");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {(dir / "cut.png").string(), "truncated PNG"},
+      {(dir / "cam.json").string(), "field 'width' = \"640\": expected an integer"},
+      {(dir / "missing.mp4").string(), "does not exist"},
+  };
+  for (const auto& [path, problem] : cases) {
+    const Result r = RunCli({"inspect", path});
+    EXPECT_EQ(r.status, kExitError) << path;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("pano4d: error: " + path + ": ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(problem), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty());
+  }
+}
+
+TEST(CliTest, BenchCameraReportsExactRoundTripsForEveryModel) {
+  const Result r = RunCli({"bench", "camera", "--grid", "16", "--min-seconds", "0.001", "--json"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  std::istringstream lines(r.out);
+  std::string line;
+  std::set<std::string> models;
+  while (std::getline(lines, line)) {
+    const Json row = Json::parse(line);
+    models.insert(row["model"].get<std::string>());
+    EXPECT_EQ(row["failures"], 0) << line;
+    EXPECT_LT(row["max_error_px"].get<double>(), 1e-9) << line;
+    EXPECT_GT(row["unproject_ns"].get<double>(), 0.0);
+  }
+  EXPECT_EQ(models.size(), AllCameraModels().size());
+}
+
+}  // namespace
+}  // namespace pano4d::cli
