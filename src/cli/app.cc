@@ -23,21 +23,34 @@ struct PlannedCommand {
 };
 
 const std::vector<PlannedCommand> kPlannedCommands = {
-    {"sfm", "Camera poses and sparse points with COLMAP, from a video, images or known poses"},
-    {"depth", "Per-frame depth: from the dataset, or CPU stereo aligned to the sparse points"},
-    {"fit", "Fit the dynamic 4D Gaussians to the video (with panoramic expansion)"},
-    {"expand", "Run one panoramic expansion step: trajectories, warping, prior, refinement"},
-    {"render", "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
-    {"export", "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
-    {"eval", "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
+    {"sfm",
+     "Camera poses and sparse points with COLMAP, from a video, images or "
+     "known poses"},
+    {"depth",
+     "Per-frame depth: from the dataset, or CPU stereo aligned to the sparse "
+     "points"},
+    {"fit",
+     "Fit the dynamic 4D Gaussians to the video (with panoramic expansion)"},
+    {"expand",
+     "Run one panoramic expansion step: trajectories, warping, prior, "
+     "refinement"},
+    {"render",
+     "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
+    {"export",
+     "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
+    {"eval",
+     "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
     {"synth", "Generate a synthetic dynamic scene with exact ground truth"},
-    {"dataset", "Inspect a dataset (DyCheck iPhone, Nvidia, Kubric-4D, synthetic)"},
-    {"run", "Plan and run every stage on a video, images, workspace or dataset"},
+    {"dataset",
+     "Inspect a dataset (DyCheck iPhone, Nvidia, Kubric-4D, synthetic)"},
+    {"run",
+     "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
     {"make-pairs", "Panoramic-trajectory training pairs for a video prior"},
 };
 
-void AddPlannedCommand(CLI::App& app, const PlannedCommand& command, Action* action) {
+void AddPlannedCommand(CLI::App& app, const PlannedCommand& command,
+                       Action* action) {
   CLI::App* sub = app.add_subcommand(command.name, command.description);
   sub->allow_extras();
   sub->footer("Not built yet in this version of pano4d.");
@@ -55,13 +68,16 @@ void AddPlannedCommand(CLI::App& app, const PlannedCommand& command, Action* act
 
 int Main(int argc, char** argv) {
   CLI::App app{
-      "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen regions "
+      "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen "
+      "regions "
       "synthesised by panoramic expansion. Extra stages for a COLMAP workflow.",
       "pano4d"};
   app.set_version_flag("--version", std::string("pano4d ") + kVersion);
   app.require_subcommand(0, 1);
-  app.footer("Exit status: 0 ok, 1 error (the message names the input), 2 not built yet, "
-             "64 usage error.");
+  app.footer(
+      "Exit status: 0 ok, 1 error (the message names the input), 2 not built "
+      "yet, "
+      "64 usage error.");
 
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "debug, info, warning or error")
@@ -75,7 +91,8 @@ int Main(int argc, char** argv) {
   Action action;
   AddInspectCommand(app, &action);
   AddBenchCommand(app, &action);
-  for (const PlannedCommand& command : kPlannedCommands) AddPlannedCommand(app, command, &action);
+  for (const PlannedCommand& command : kPlannedCommands)
+    AddPlannedCommand(app, command, &action);
 
   try {
     app.parse(argc, argv);
@@ -91,8 +108,8 @@ int Main(int argc, char** argv) {
   }
 
   SetLogLevel(verbose ? LogLevel::kDebug
-                      : quiet ? LogLevel::kWarning
-                              : ParseLogLevel(log_level).value_or(LogLevel::kInfo));
+              : quiet ? LogLevel::kWarning
+                      : ParseLogLevel(log_level).value_or(LogLevel::kInfo));
   if (!action) {
     std::cout << app.help();
     return kExitUsage;

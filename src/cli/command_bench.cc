@@ -21,7 +21,7 @@ namespace pano4d::cli {
 namespace {
 
 struct BenchCameraOptions {
-  int grid = 64;          // steps along x; y gets 3/4 of it
+  int grid = 64;  // steps along x; y gets 3/4 of it
   double min_seconds = 0.2;
   bool json = false;
 };
@@ -45,30 +45,39 @@ std::vector<CameraCase> BenchCameras() {
       {"none", make(CameraModelId::kPinhole, {500, 505, 320, 240})},
       {"k=-0.4", make(CameraModelId::kSimpleRadial, {800, 320, 240, -0.4})},
       {"k=+0.4", make(CameraModelId::kSimpleRadial, {500, 320, 240, 0.4})},
-      {"k1=-0.4 k2=0.1", make(CameraModelId::kRadial, {800, 320, 240, -0.4, 0.1})},
-      {"k1=-0.4 p=1e-3", make(CameraModelId::kOpenCV, {800, 805, 320, 240, -0.4, 0.1, 1e-3, -1e-3})},
+      {"k1=-0.4 k2=0.1",
+       make(CameraModelId::kRadial, {800, 320, 240, -0.4, 0.1})},
+      {"k1=-0.4 p=1e-3", make(CameraModelId::kOpenCV,
+                              {800, 805, 320, 240, -0.4, 0.1, 1e-3, -1e-3})},
       {"80 deg at corner",
-       make(CameraModelId::kOpenCVFisheye, {268, 268, 320, 240, 0.05, -0.01, 0.002, -0.0005})},
-      {"rational", make(CameraModelId::kFullOpenCV,
-                        {600, 600, 320, 240, -0.3, 0.08, 1e-3, -1e-3, -0.01, 0.05, 0.01, 0.001})},
+       make(CameraModelId::kOpenCVFisheye,
+            {268, 268, 320, 240, 0.05, -0.01, 0.002, -0.0005})},
+      {"rational",
+       make(CameraModelId::kFullOpenCV, {600, 600, 320, 240, -0.3, 0.08, 1e-3,
+                                         -1e-3, -0.01, 0.05, 0.01, 0.001})},
       {"omega=0.9", make(CameraModelId::kFOV, {400, 400, 320, 240, 0.9})},
-      {"k=0.05", make(CameraModelId::kSimpleRadialFisheye, {280, 320, 240, 0.05})},
-      {"k1=0.05 k2=-0.01", make(CameraModelId::kRadialFisheye, {280, 320, 240, 0.05, -0.01})},
+      {"k=0.05",
+       make(CameraModelId::kSimpleRadialFisheye, {280, 320, 240, 0.05})},
+      {"k1=0.05 k2=-0.01",
+       make(CameraModelId::kRadialFisheye, {280, 320, 240, 0.05, -0.01})},
       {"thin prism", make(CameraModelId::kThinPrismFisheye,
-                          {280, 280, 320, 240, 0.05, -0.01, 1e-3, -1e-3, 0.002, -0.0005, 1e-3, -1e-3})},
+                          {280, 280, 320, 240, 0.05, -0.01, 1e-3, -1e-3, 0.002,
+                           -0.0005, 1e-3, -1e-3})},
   };
 }
 
 // Runs `body` in growing batches until min_seconds have passed; returns
 // nanoseconds per call of `calls_per_body` calls.
 template <typename F>
-double NanosecondsPerCall(double min_seconds, std::int64_t calls_per_body, F&& body) {
+double NanosecondsPerCall(double min_seconds, std::int64_t calls_per_body,
+                          F&& body) {
   std::int64_t repeats = 1;
   while (true) {
     Timer timer;
     for (std::int64_t r = 0; r < repeats; ++r) body();
     const double seconds = timer.WallSeconds();
-    if (seconds >= min_seconds) return 1e9 * seconds / (repeats * calls_per_body);
+    if (seconds >= min_seconds)
+      return 1e9 * seconds / (repeats * calls_per_body);
     repeats *= 2;
   }
 }
@@ -77,9 +86,11 @@ int RunBenchCamera(const BenchCameraOptions& options) {
   const int grid_x = options.grid;
   const int grid_y = options.grid * 3 / 4;
   if (!options.json) {
-    std::printf("pano4d %s bench camera: 640x480, %d pixels per model (edge to edge, corners "
-                "included), 1 thread\n",
-                kVersion, (grid_x + 1) * (grid_y + 1));
+    std::printf(
+        "pano4d %s bench camera: 640x480, %d pixels per model (edge to edge, "
+        "corners "
+        "included), 1 thread\n",
+        kVersion, (grid_x + 1) * (grid_y + 1));
     std::printf("%-22s %-18s %13s %6s %6s %11s %13s\n", "model", "distortion",
                 "max err (px)", "fail", "iters", "project ns", "unproject ns");
   }
@@ -103,10 +114,12 @@ int RunBenchCamera(const BenchCameraOptions& options) {
     double sink = 0.0;
     const std::int64_t n = static_cast<std::int64_t>(pixels.size());
     const double project_ns = NanosecondsPerCall(options.min_seconds, n, [&] {
-      for (const Eigen::Vector3d& ray : rays) sink += camera.Project(ray).value_or(Eigen::Vector2d::Zero()).x();
+      for (const Eigen::Vector3d& ray : rays)
+        sink += camera.Project(ray).value_or(Eigen::Vector2d::Zero()).x();
     });
     const double unproject_ns = NanosecondsPerCall(options.min_seconds, n, [&] {
-      for (const Eigen::Vector2d& pixel : pixels) sink += camera.Unproject(pixel).ray.x();
+      for (const Eigen::Vector2d& pixel : pixels)
+        sink += camera.Unproject(pixel).ray.x();
     });
     // A volatile store keeps the compiler from dropping the timed calls.
     static volatile double keep_results;
@@ -124,22 +137,25 @@ int RunBenchCamera(const BenchCameraOptions& options) {
                        .dump()
                 << "\n";
     } else {
-      std::printf("%-22s %-18s %13.2e %6lld %6.1f %11.1f %13.1f\n", model.c_str(),
-                  c.label.c_str(), stats.max_error_px, static_cast<long long>(stats.failures),
-                  stats.mean_iterations, project_ns, unproject_ns);
+      std::printf("%-22s %-18s %13.2e %6lld %6.1f %11.1f %13.1f\n",
+                  model.c_str(), c.label.c_str(), stats.max_error_px,
+                  static_cast<long long>(stats.failures), stats.mean_iterations,
+                  project_ns, unproject_ns);
     }
   }
   return kExitOk;
 }
 
-void AddPlannedBench(CLI::App& bench, const char* name, const char* description, Action* action) {
+void AddPlannedBench(CLI::App& bench, const char* name, const char* description,
+                     Action* action) {
   CLI::App* sub = bench.add_subcommand(name, description);
   sub->allow_extras();
   sub->footer("Not built yet in this version of pano4d.");
   const std::string label = name;
   sub->callback([action, label] {
     *action = [label] {
-      std::cerr << "pano4d bench " << label << ": not built yet in pano4d " << kVersion << "\n";
+      std::cerr << "pano4d bench " << label << ": not built yet in pano4d "
+                << kVersion << "\n";
       return kExitNotBuilt;
     };
   });
@@ -148,24 +164,38 @@ void AddPlannedBench(CLI::App& bench, const char* name, const char* description,
 }  // namespace
 
 void AddBenchCommand(CLI::App& app, Action* action) {
-  CLI::App* bench = app.add_subcommand("bench", "Speed and accuracy tables (error against run time)");
+  CLI::App* bench = app.add_subcommand(
+      "bench", "Speed and accuracy tables (error against run time)");
   bench->require_subcommand(1);
 
   auto options = std::make_shared<BenchCameraOptions>();
-  CLI::App* camera = bench->add_subcommand(
-      "camera", "Every camera model: round-trip error over the image against ns per call");
-  camera->add_option("--grid", options->grid, "Samples along x (y gets 3/4 as many)")
+  CLI::App* camera =
+      bench->add_subcommand("camera",
+                            "Every camera model: round-trip error over the "
+                            "image against ns per call");
+  camera
+      ->add_option("--grid", options->grid,
+                   "Samples along x (y gets 3/4 as many)")
       ->check(CLI::Range(2, 4096))
       ->capture_default_str();
-  camera->add_option("--min-seconds", options->min_seconds, "Minimum timing per measurement")
+  camera
+      ->add_option("--min-seconds", options->min_seconds,
+                   "Minimum timing per measurement")
       ->check(CLI::Range(0.001, 60.0))
       ->capture_default_str();
-  camera->add_flag("--json", options->json, "One JSON object per line instead of a table");
-  camera->callback([action, options] { *action = [options] { return RunBenchCamera(*options); }; });
+  camera->add_flag("--json", options->json,
+                   "One JSON object per line instead of a table");
+  camera->callback([action, options] {
+    *action = [options] { return RunBenchCamera(*options); };
+  });
 
-  AddPlannedBench(*bench, "render", "Rasterizer forward and backward speed", action);
-  AddPlannedBench(*bench, "stability", "Stiff and extreme cases: count of non-finite values", action);
-  AddPlannedBench(*bench, "budget", "PSNR/mPSNR/uPSNR against wall time across budgets", action);
+  AddPlannedBench(*bench, "render", "Rasterizer forward and backward speed",
+                  action);
+  AddPlannedBench(*bench, "stability",
+                  "Stiff and extreme cases: count of non-finite values",
+                  action);
+  AddPlannedBench(*bench, "budget",
+                  "PSNR/mPSNR/uPSNR against wall time across budgets", action);
 }
 
 }  // namespace pano4d::cli

@@ -38,14 +38,16 @@ std::string LowerExtension(const std::filesystem::path& path) {
 
 std::string GuessKind(const std::filesystem::path& path) {
   const std::string ext = LowerExtension(path);
-  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr") return "image";
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr")
+    return "image";
   if (ext == ".json") return "json";
-  if (ext == ".mp4" || ext == ".avi" || ext == ".mov" || ext == ".mkv" || ext == ".webm" ||
-      ext == ".m4v") {
+  if (ext == ".mp4" || ext == ".avi" || ext == ".mov" || ext == ".mkv" ||
+      ext == ".webm" || ext == ".m4v") {
     return "video";
   }
-  throw Error(path.string(), "extension", "\"" + path.extension().string() + "\"",
-              "cannot tell what this file is; pass --as image|video|camera|json");
+  throw Error(
+      path.string(), "extension", "\"" + path.extension().string() + "\"",
+      "cannot tell what this file is; pass --as image|video|camera|json");
 }
 
 Json InspectImage(const std::filesystem::path& path) {
@@ -108,14 +110,17 @@ int RunInspect(const InspectOptions& options) {
     out = InspectVideo(path, options.count_frames);
   } else {
     const Json json = ReadJson(path);
-    if (kind == "camera" || (kind == "json" && json.is_object() && json.contains("model"))) {
+    if (kind == "camera" ||
+        (kind == "json" && json.is_object() && json.contains("model"))) {
       out = InspectCamera(json, path.string());
     } else {
       Json keys = Json::array();
       if (json.is_object()) {
         for (const auto& item : json.items()) keys.push_back(item.key());
       }
-      out = Json{{"kind", "json"}, {"path", path.string()}, {"type", json.type_name()},
+      out = Json{{"kind", "json"},
+                 {"path", path.string()},
+                 {"type", json.type_name()},
                  {"keys", keys}};
     }
   }
@@ -129,15 +134,20 @@ void AddInspectCommand(CLI::App& app, Action* action) {
   auto options = std::make_shared<InspectOptions>();
   CLI::App* sub = app.add_subcommand(
       "inspect",
-      "Read an image, video or camera JSON as the pipeline would and print what it holds "
+      "Read an image, video or camera JSON as the pipeline would and print "
+      "what it holds "
       "(JSON on stdout); a bad file gives the pipeline's error");
   sub->add_option("path", options->path, "File to read")->required();
-  sub->add_option("--as", options->as, "What the file is, when the extension does not say")
+  sub->add_option("--as", options->as,
+                  "What the file is, when the extension does not say")
       ->check(CLI::IsMember({"auto", "image", "video", "camera", "json"}))
       ->capture_default_str();
-  sub->add_flag("--count-frames", options->count_frames,
-                "Decode a whole video to count its frames (containers may misreport)");
-  sub->callback([action, options] { *action = [options] { return RunInspect(*options); }; });
+  sub->add_flag(
+      "--count-frames", options->count_frames,
+      "Decode a whole video to count its frames (containers may misreport)");
+  sub->callback([action, options] {
+    *action = [options] { return RunInspect(*options); };
+  });
 }
 
 }  // namespace pano4d::cli

@@ -25,7 +25,8 @@ inline Dual Sqrt(const Dual& x) {
   return Dual(s, x.derivatives() * (0.5 / s));
 }
 inline Dual Atan(const Dual& x) {
-  return Dual(std::atan(x.value()), x.derivatives() / (1.0 + x.value() * x.value()));
+  return Dual(std::atan(x.value()),
+              x.derivatives() / (1.0 + x.value() * x.value()));
 }
 
 // Below this radius off the optical axis the fisheye angle map is the
@@ -39,7 +40,8 @@ constexpr double kFisheyeAxisEpsilon = std::numeric_limits<double>::epsilon();
 // 1 + |target|). At a focal length of 1000 px the acceptance bound is 1e-9 px.
 constexpr int kMaxUndistortIterations = 100;
 constexpr int kMaxStepHalvings = 30;
-constexpr double kUndistortStopTolerance = 4 * std::numeric_limits<double>::epsilon();
+constexpr double kUndistortStopTolerance =
+    4 * std::numeric_limits<double>::epsilon();
 constexpr double kUndistortTolerance = 1e-12;
 
 // A fisheye ray must stay strictly in front of the camera: COLMAP's fisheye
@@ -47,19 +49,23 @@ constexpr double kUndistortTolerance = 1e-12;
 constexpr double kMaxFisheyeAngle = M_PI / 2 - 1e-9;
 
 const std::vector<CameraModelInfo> kModels = {
-    {CameraModelId::kSimplePinhole, "SIMPLE_PINHOLE", 3, "f, cx, cy", true, false},
+    {CameraModelId::kSimplePinhole, "SIMPLE_PINHOLE", 3, "f, cx, cy", true,
+     false},
     {CameraModelId::kPinhole, "PINHOLE", 4, "fx, fy, cx, cy", false, false},
-    {CameraModelId::kSimpleRadial, "SIMPLE_RADIAL", 4, "f, cx, cy, k", true, false},
+    {CameraModelId::kSimpleRadial, "SIMPLE_RADIAL", 4, "f, cx, cy, k", true,
+     false},
     {CameraModelId::kRadial, "RADIAL", 5, "f, cx, cy, k1, k2", true, false},
-    {CameraModelId::kOpenCV, "OPENCV", 8, "fx, fy, cx, cy, k1, k2, p1, p2", false, false},
-    {CameraModelId::kOpenCVFisheye, "OPENCV_FISHEYE", 8, "fx, fy, cx, cy, k1, k2, k3, k4",
-     false, true},
+    {CameraModelId::kOpenCV, "OPENCV", 8, "fx, fy, cx, cy, k1, k2, p1, p2",
+     false, false},
+    {CameraModelId::kOpenCVFisheye, "OPENCV_FISHEYE", 8,
+     "fx, fy, cx, cy, k1, k2, k3, k4", false, true},
     {CameraModelId::kFullOpenCV, "FULL_OPENCV", 12,
      "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6", false, false},
     {CameraModelId::kFOV, "FOV", 5, "fx, fy, cx, cy, omega", false, false},
-    {CameraModelId::kSimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 4, "f, cx, cy, k", true,
-     true},
-    {CameraModelId::kRadialFisheye, "RADIAL_FISHEYE", 5, "f, cx, cy, k1, k2", true, true},
+    {CameraModelId::kSimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 4,
+     "f, cx, cy, k", true, true},
+    {CameraModelId::kRadialFisheye, "RADIAL_FISHEYE", 5, "f, cx, cy, k1, k2",
+     true, true},
     {CameraModelId::kThinPrismFisheye, "THIN_PRISM_FISHEYE", 12,
      "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1", false, true},
 };
@@ -87,7 +93,8 @@ void AngleFromNormalized(const T& u, const T& v, T* a, T* b) {
 // coordinates for fisheye models) to distorted coordinates. `k` points at the
 // model's extra parameters.
 template <typename T>
-void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud, T* vd) {
+void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud,
+             T* vd) {
   const T u2 = u * u;
   const T v2 = v * v;
   const T uv = u * v;
@@ -127,7 +134,8 @@ void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud, T
     }
     case CameraModelId::kOpenCVFisheye: {
       const T t4 = r2 * r2;  // r2 is theta^2 in angle coordinates
-      const T scale = 1.0 + k[0] * r2 + k[1] * t4 + k[2] * t4 * r2 + k[3] * t4 * t4;
+      const T scale =
+          1.0 + k[0] * r2 + k[1] * t4 + k[2] * t4 * r2 + k[3] * t4 * t4;
       *ud = u * scale;
       *vd = v * scale;
       return;
@@ -147,8 +155,10 @@ void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud, T
     case CameraModelId::kThinPrismFisheye: {
       const T r4 = r2 * r2;
       const T radial = k[0] * r2 + k[1] * r4 + k[4] * r4 * r2 + k[5] * r4 * r4;
-      *ud = u + u * radial + 2.0 * k[2] * uv + k[3] * (r2 + 2.0 * u2) + k[6] * r2;
-      *vd = v + v * radial + 2.0 * k[3] * uv + k[2] * (r2 + 2.0 * v2) + k[7] * r2;
+      *ud =
+          u + u * radial + 2.0 * k[2] * uv + k[3] * (r2 + 2.0 * u2) + k[6] * r2;
+      *vd =
+          v + v * radial + 2.0 * k[3] * uv + k[2] * (r2 + 2.0 * v2) + k[7] * r2;
       return;
     }
     case CameraModelId::kFOV: {
@@ -162,7 +172,8 @@ void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud, T
         factor = (omega2 * r2) / 3.0 - omega2 / 12.0 + 1.0;
       } else if (Value(r2) < kFovSeriesEpsilon) {
         const double tan_half = std::tan(omega / 2);
-        factor = (-2.0 * tan_half * (4.0 * r2 * tan_half * tan_half - 3.0)) / (3.0 * omega);
+        factor = (-2.0 * tan_half * (4.0 * r2 * tan_half * tan_half - 3.0)) /
+                 (3.0 * omega);
       } else {
         const T r = Sqrt(r2);
         factor = Atan(T(r * (2.0 * std::tan(omega / 2)))) / (r * omega);
@@ -179,8 +190,8 @@ void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud, T
 // Normalized -> distorted normalized, the whole model short of focal length
 // and principal point.
 template <typename T>
-void DistortNormalized(CameraModelId id, const double* k, bool fisheye, const T& u,
-                       const T& v, T* ud, T* vd) {
+void DistortNormalized(CameraModelId id, const double* k, bool fisheye,
+                       const T& u, const T& v, T* ud, T* vd) {
   if (fisheye) {
     T a, b;
     AngleFromNormalized(u, v, &a, &b);
@@ -190,7 +201,9 @@ void DistortNormalized(CameraModelId id, const double* k, bool fisheye, const T&
   }
 }
 
-int ExtraOffset(const CameraModelInfo& info) { return info.single_focal ? 3 : 4; }
+int ExtraOffset(const CameraModelInfo& info) {
+  return info.single_focal ? 3 : 4;
+}
 
 // Value and 2x2 Jacobian of a map evaluated with dual numbers.
 template <typename F>
@@ -217,7 +230,8 @@ const std::vector<CameraModelInfo>& AllCameraModels() { return kModels; }
 const CameraModelInfo& GetCameraModelInfo(CameraModelId id) {
   const int index = static_cast<int>(id);
   if (index < 0 || index >= static_cast<int>(kModels.size())) {
-    throw Error("camera", "model_id", std::to_string(index), "not a COLMAP camera model id");
+    throw Error("camera", "model_id", std::to_string(index),
+                "not a COLMAP camera model id");
   }
   return kModels[index];
 }
@@ -241,7 +255,8 @@ std::string_view ToString(UnprojectStatus status) {
     case UnprojectStatus::kInvalidInput:
       return "pixel is not finite";
     case UnprojectStatus::kOutsideDomain:
-      return "no ray maps to this pixel (outside the distortion model's valid domain)";
+      return "no ray maps to this pixel (outside the distortion model's valid "
+             "domain)";
     case UnprojectStatus::kNotConverged:
       return "iterative undistortion did not converge";
   }
@@ -251,21 +266,24 @@ std::string_view ToString(UnprojectStatus status) {
 void Camera::Check(const std::string& source) const {
   const int id = static_cast<int>(model_id);
   if (!CameraModelFromId(id)) {
-    throw Error(source, "model", std::to_string(id), "not a COLMAP camera model id");
+    throw Error(source, "model", std::to_string(id),
+                "not a COLMAP camera model id");
   }
-  if (width <= 0) throw Error(source, "width", std::to_string(width), "must be positive");
-  if (height <= 0) throw Error(source, "height", std::to_string(height), "must be positive");
+  if (width <= 0)
+    throw Error(source, "width", std::to_string(width), "must be positive");
+  if (height <= 0)
+    throw Error(source, "height", std::to_string(height), "must be positive");
   const CameraModelInfo& model = info();
   if (static_cast<int>(params.size()) != model.num_params) {
     throw Error(source, "params", std::to_string(params.size()) + " values",
                 "model " + std::string(model.name) + " expects " +
-                    std::to_string(model.num_params) + " (" + std::string(model.params_info) +
-                    ")");
+                    std::to_string(model.num_params) + " (" +
+                    std::string(model.params_info) + ")");
   }
   for (std::size_t i = 0; i < params.size(); ++i) {
     if (!std::isfinite(params[i])) {
-      throw Error(source, "params[" + std::to_string(i) + "]", std::to_string(params[i]),
-                  "must be finite");
+      throw Error(source, "params[" + std::to_string(i) + "]",
+                  std::to_string(params[i]), "must be finite");
     }
   }
   if (!(focal_x() > 0) || !(focal_y() > 0)) {
@@ -274,15 +292,23 @@ void Camera::Check(const std::string& source) const {
   }
 }
 
-double Camera::focal_y() const { return info().single_focal ? params[0] : params[1]; }
-double Camera::principal_x() const { return params[info().single_focal ? 1 : 2]; }
-double Camera::principal_y() const { return params[info().single_focal ? 2 : 3]; }
-
-bool Camera::HasDistortion() const {
-  return model_id != CameraModelId::kSimplePinhole && model_id != CameraModelId::kPinhole;
+double Camera::focal_y() const {
+  return info().single_focal ? params[0] : params[1];
+}
+double Camera::principal_x() const {
+  return params[info().single_focal ? 1 : 2];
+}
+double Camera::principal_y() const {
+  return params[info().single_focal ? 2 : 3];
 }
 
-Eigen::Vector2d Camera::PixelFromNormalized(const Eigen::Vector2d& normalized) const {
+bool Camera::HasDistortion() const {
+  return model_id != CameraModelId::kSimplePinhole &&
+         model_id != CameraModelId::kPinhole;
+}
+
+Eigen::Vector2d Camera::PixelFromNormalized(
+    const Eigen::Vector2d& normalized) const {
   const CameraModelInfo& model = info();
   double xd, yd;
   DistortNormalized(model_id, params.data() + ExtraOffset(model), model.fisheye,
@@ -290,7 +316,8 @@ Eigen::Vector2d Camera::PixelFromNormalized(const Eigen::Vector2d& normalized) c
   return {focal_x() * xd + principal_x(), focal_y() * yd + principal_y()};
 }
 
-Eigen::Matrix2d Camera::JacobianNormalized(const Eigen::Vector2d& normalized) const {
+Eigen::Matrix2d Camera::JacobianNormalized(
+    const Eigen::Vector2d& normalized) const {
   const CameraModelInfo& model = info();
   const double* k = params.data() + ExtraOffset(model);
   Eigen::Matrix2d jacobian;
@@ -304,7 +331,8 @@ Eigen::Matrix2d Camera::JacobianNormalized(const Eigen::Vector2d& normalized) co
   return jacobian;
 }
 
-Eigen::Matrix<double, 2, 3> Camera::JacobianPointCam(const Eigen::Vector3d& point_cam) const {
+Eigen::Matrix<double, 2, 3> Camera::JacobianPointCam(
+    const Eigen::Vector3d& point_cam) const {
   const double inv_z = 1.0 / point_cam.z();
   const Eigen::Vector2d normalized = point_cam.head<2>() * inv_z;
   Eigen::Matrix<double, 2, 3> d_normalized;
@@ -313,8 +341,10 @@ Eigen::Matrix<double, 2, 3> Camera::JacobianPointCam(const Eigen::Vector3d& poin
   return JacobianNormalized(normalized) * d_normalized;
 }
 
-std::optional<Eigen::Vector2d> Camera::Project(const Eigen::Vector3d& point_cam) const {
-  if (!(point_cam.z() > kMinProjectDepth) || !point_cam.allFinite()) return std::nullopt;
+std::optional<Eigen::Vector2d> Camera::Project(
+    const Eigen::Vector3d& point_cam) const {
+  if (!(point_cam.z() > kMinProjectDepth) || !point_cam.allFinite())
+    return std::nullopt;
   const Eigen::Vector2d normalized = point_cam.head<2>() / point_cam.z();
   if (HasDistortion() && !(JacobianNormalized(normalized).determinant() > 0)) {
     return std::nullopt;
@@ -387,12 +417,14 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
       result.status = UnprojectStatus::kOutsideDomain;
       return result;
     }
-    const Eigen::Vector2d axis = theta > kFisheyeAxisEpsilon ? Eigen::Vector2d(x / theta)
-                                                             : Eigen::Vector2d::Zero();
-    const double tan_over_theta = theta > kFisheyeAxisEpsilon ? std::tan(theta) / theta : 1.0;
+    const Eigen::Vector2d axis = theta > kFisheyeAxisEpsilon
+                                     ? Eigen::Vector2d(x / theta)
+                                     : Eigen::Vector2d::Zero();
+    const double tan_over_theta =
+        theta > kFisheyeAxisEpsilon ? std::tan(theta) / theta : 1.0;
     result.normalized = x * tan_over_theta;
-    result.ray = Eigen::Vector3d(std::sin(theta) * axis.x(), std::sin(theta) * axis.y(),
-                                 std::cos(theta));
+    result.ray = Eigen::Vector3d(std::sin(theta) * axis.x(),
+                                 std::sin(theta) * axis.y(), std::cos(theta));
   } else {
     result.normalized = x;
     result.ray = Eigen::Vector3d(x.x(), x.y(), 1.0).normalized();
@@ -405,7 +437,8 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
 Camera Camera::Rescaled(int new_width, int new_height) const {
   Check();
   if (new_width <= 0 || new_height <= 0) {
-    throw Error("camera", "size", std::to_string(new_width) + "x" + std::to_string(new_height),
+    throw Error("camera", "size",
+                std::to_string(new_width) + "x" + std::to_string(new_height),
                 "rescaled size must be positive");
   }
   const double sx = static_cast<double>(new_width) / width;
@@ -442,7 +475,8 @@ Camera CameraFromJson(const Json& json, const std::string& source) {
     for (const CameraModelInfo& info : kModels) {
       known += (known.empty() ? "" : ", ") + std::string(info.name);
     }
-    throw Error(source, "model", "\"" + name + "\"", "unknown camera model; use one of " + known);
+    throw Error(source, "model", "\"" + name + "\"",
+                "unknown camera model; use one of " + known);
   }
   camera.model_id = *id;
   camera.width = GetJson<int>(json, "width", source);

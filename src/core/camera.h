@@ -20,26 +20,27 @@ namespace pano4d {
 // "Normalized" coordinates are (x/z, y/z) of a camera-frame point, before
 // distortion.
 enum class CameraModelId : int {
-  kSimplePinhole = 0,       // f, cx, cy
-  kPinhole = 1,             // fx, fy, cx, cy
-  kSimpleRadial = 2,        // f, cx, cy, k
-  kRadial = 3,              // f, cx, cy, k1, k2
-  kOpenCV = 4,              // fx, fy, cx, cy, k1, k2, p1, p2
-  kOpenCVFisheye = 5,       // fx, fy, cx, cy, k1, k2, k3, k4
-  kFullOpenCV = 6,          // fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6
-  kFOV = 7,                 // fx, fy, cx, cy, omega
-  kSimpleRadialFisheye = 8, // f, cx, cy, k
-  kRadialFisheye = 9,       // f, cx, cy, k1, k2
-  kThinPrismFisheye = 10,   // fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1
+  kSimplePinhole = 0,        // f, cx, cy
+  kPinhole = 1,              // fx, fy, cx, cy
+  kSimpleRadial = 2,         // f, cx, cy, k
+  kRadial = 3,               // f, cx, cy, k1, k2
+  kOpenCV = 4,               // fx, fy, cx, cy, k1, k2, p1, p2
+  kOpenCVFisheye = 5,        // fx, fy, cx, cy, k1, k2, k3, k4
+  kFullOpenCV = 6,           // fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6
+  kFOV = 7,                  // fx, fy, cx, cy, omega
+  kSimpleRadialFisheye = 8,  // f, cx, cy, k
+  kRadialFisheye = 9,        // f, cx, cy, k1, k2
+  kThinPrismFisheye = 10,    // fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1
 };
 
 struct CameraModelInfo {
   CameraModelId id;
-  std::string_view name;         // COLMAP's name, e.g. "OPENCV"
+  std::string_view name;  // COLMAP's name, e.g. "OPENCV"
   int num_params;
-  std::string_view params_info;  // COLMAP's parameter list, e.g. "fx, fy, cx, cy, ..."
-  bool single_focal;             // one f for both axes
-  bool fisheye;                  // distortion acts on the angle off the axis
+  std::string_view
+      params_info;    // COLMAP's parameter list, e.g. "fx, fy, cx, cy, ..."
+  bool single_focal;  // one f for both axes
+  bool fisheye;       // distortion acts on the angle off the axis
 };
 
 // Every model, ordered by id.
@@ -91,14 +92,16 @@ struct Camera {
   // the camera (z <= kMinProjectDepth) or lies where the distortion model
   // folds back on itself (the Jacobian of distortion has det <= 0), since a
   // pixel computed there would be a false image of the point.
-  std::optional<Eigen::Vector2d> Project(const Eigen::Vector3d& point_cam) const;
+  std::optional<Eigen::Vector2d> Project(
+      const Eigen::Vector3d& point_cam) const;
 
   // Normalized to pixel, without the validity checks of Project.
   Eigen::Vector2d PixelFromNormalized(const Eigen::Vector2d& normalized) const;
 
   // d pixel / d normalized (2x2), and d pixel / d point_cam (2x3).
   Eigen::Matrix2d JacobianNormalized(const Eigen::Vector2d& normalized) const;
-  Eigen::Matrix<double, 2, 3> JacobianPointCam(const Eigen::Vector3d& point_cam) const;
+  Eigen::Matrix<double, 2, 3> JacobianPointCam(
+      const Eigen::Vector3d& point_cam) const;
 
   // Pixel to normalized coordinates and unit ray, inverting the distortion by
   // Newton's method. A pixel with no valid preimage, or whose iteration does

@@ -4,13 +4,15 @@
 
 namespace pano4d {
 
-RoundTripStats MeasureRoundTrip(const Camera& camera, int steps_x, int steps_y) {
+RoundTripStats MeasureRoundTrip(const Camera& camera, int steps_x,
+                                int steps_y) {
   RoundTripStats stats;
   std::int64_t iterations = 0;
   for (int j = 0; j <= steps_y; ++j) {
     for (int i = 0; i <= steps_x; ++i) {
-      const Eigen::Vector2d pixel(camera.width * static_cast<double>(i) / steps_x,
-                                  camera.height * static_cast<double>(j) / steps_y);
+      const Eigen::Vector2d pixel(
+          camera.width * static_cast<double>(i) / steps_x,
+          camera.height * static_cast<double>(j) / steps_y);
       ++stats.samples;
       const UnprojectResult ray = camera.Unproject(pixel);
       const std::optional<Eigen::Vector2d> back =

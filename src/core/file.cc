@@ -52,7 +52,8 @@ fs::path TemporaryPathFor(const fs::path& path) {
   const std::string infix = ".tmp." + std::to_string(::getpid()) + "." +
                             std::to_string(counter.fetch_add(1));
   fs::path tmp = path;
-  tmp.replace_filename(path.stem().string() + infix + path.extension().string());
+  tmp.replace_filename(path.stem().string() + infix +
+                       path.extension().string());
   return tmp;
 }
 
@@ -90,7 +91,8 @@ void WriteFileAtomically(const fs::path& path, std::string_view bytes) {
 void EnsureDirectory(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) throw Error::In(dir.string(), "cannot create directory: " + ec.message());
+  if (ec)
+    throw Error::In(dir.string(), "cannot create directory: " + ec.message());
   if (!fs::is_directory(dir)) {
     throw Error::In(dir.string(), "exists but is not a directory");
   }

@@ -23,9 +23,11 @@ std::filesystem::path TemporaryPathFor(const std::filesystem::path& path);
 // `path`, so a reader never sees a half-written file and a killed run leaves
 // the previous version intact. Creates the parent directory. If `write`
 // throws, the temporary is removed and the exception propagates.
-void WriteAtomically(const std::filesystem::path& path,
-                     const std::function<void(const std::filesystem::path&)>& write);
-void WriteFileAtomically(const std::filesystem::path& path, std::string_view bytes);
+void WriteAtomically(
+    const std::filesystem::path& path,
+    const std::function<void(const std::filesystem::path&)>& write);
+void WriteFileAtomically(const std::filesystem::path& path,
+                         std::string_view bytes);
 
 // Creates `dir` (and parents) or throws an Error naming it.
 void EnsureDirectory(const std::filesystem::path& dir);

@@ -19,37 +19,47 @@ namespace {
 // codec is first used (a guard against CVEs in old OpenEXR versions; Debian
 // ships a maintained OpenEXR).
 void EnableOpenExr() {
-  static const bool enabled = [] { return ::setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0) == 0; }();
+  static const bool enabled = [] {
+    return ::setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0) == 0;
+  }();
   (void)enabled;
 }
 
-bool StartsWith(const std::vector<std::uint8_t>& bytes, std::initializer_list<std::uint8_t> sig) {
-  return bytes.size() >= sig.size() && std::equal(sig.begin(), sig.end(), bytes.begin());
+bool StartsWith(const std::vector<std::uint8_t>& bytes,
+                std::initializer_list<std::uint8_t> sig) {
+  return bytes.size() >= sig.size() &&
+         std::equal(sig.begin(), sig.end(), bytes.begin());
 }
 
 // A PNG ends with the 12-byte IEND chunk; a JPEG ends with the EOI marker
 // FF D9 (some writers pad a few bytes after it). libjpeg decodes a truncated
 // file "successfully" with a grey tail, so the check must come first.
-void CheckComplete(const std::vector<std::uint8_t>& bytes, const std::string& source) {
-  static constexpr std::array<std::uint8_t, 8> kIend = {0, 0, 0, 0, 'I', 'E', 'N', 'D'};
+void CheckComplete(const std::vector<std::uint8_t>& bytes,
+                   const std::string& source) {
+  static constexpr std::array<std::uint8_t, 8> kIend = {0,   0,   0,   0,
+                                                        'I', 'E', 'N', 'D'};
   if (StartsWith(bytes, {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'})) {
     if (bytes.size() < 8 + 12 ||
         !std::equal(kIend.begin(), kIend.end(), bytes.end() - 12)) {
       throw Error::In(source,
-                      "truncated PNG: the IEND chunk is missing (the file is incomplete; copy "
+                      "truncated PNG: the IEND chunk is missing (the file is "
+                      "incomplete; copy "
                       "or export it again)");
     }
   } else if (StartsWith(bytes, {0xff, 0xd8})) {
     constexpr std::size_t kMaxTrailingBytes = 64;
-    const std::size_t from = bytes.size() > kMaxTrailingBytes + 2 ? bytes.size() - kMaxTrailingBytes - 2 : 2;
+    const std::size_t from = bytes.size() > kMaxTrailingBytes + 2
+                                 ? bytes.size() - kMaxTrailingBytes - 2
+                                 : 2;
     bool found = false;
     for (std::size_t i = bytes.size() - 1; i > from && !found; --i) {
       found = bytes[i - 1] == 0xff && bytes[i] == 0xd9;
     }
     if (!found) {
-      throw Error::In(source,
-                      "truncated JPEG: the end-of-image marker is missing (the file is "
-                      "incomplete; copy or export it again)");
+      throw Error::In(
+          source,
+          "truncated JPEG: the end-of-image marker is missing (the file is "
+          "incomplete; copy or export it again)");
     }
   }
 }
@@ -66,13 +76,15 @@ double MaxValueOf(int depth) {
 }
 
 std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return s;
 }
 
 }  // namespace
 
-Image::Image(int width, int height) : mat_(height, width, CV_32FC3, cv::Scalar::all(0)) {}
+Image::Image(int width, int height)
+    : mat_(height, width, CV_32FC3, cv::Scalar::all(0)) {}
 
 Image Image::FromRgb32f(cv::Mat rgb) {
   if (rgb.type() != CV_32FC3) {
@@ -118,17 +130,21 @@ cv::Mat Image::ToBgr8() const {
   return out;
 }
 
-bool Image::AllFinite() const { return mat_.empty() || cv::checkRange(mat_, true); }
+bool Image::AllFinite() const {
+  return mat_.empty() || cv::checkRange(mat_, true);
+}
 
-Image DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& source,
-                  cv::Mat* alpha) {
+Image DecodeImage(const std::vector<std::uint8_t>& bytes,
+                  const std::string& source, cv::Mat* alpha) {
   EnableOpenExr();
-  if (bytes.empty()) throw Error::In(source, "is empty (0 bytes), expected an image");
+  if (bytes.empty())
+    throw Error::In(source, "is empty (0 bytes), expected an image");
   CheckComplete(bytes, source);
   const cv::Mat raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
   if (raw.empty()) {
-    throw Error::In(source,
-                    "cannot be decoded as an image (corrupt, or not a PNG/JPEG/EXR file)");
+    throw Error::In(
+        source,
+        "cannot be decoded as an image (corrupt, or not a PNG/JPEG/EXR file)");
   }
   if (alpha) {
     *alpha = cv::Mat();
@@ -145,12 +161,15 @@ Image ReadImage(const std::filesystem::path& path, cv::Mat* alpha) {
   return DecodeImage(ReadFileBytes(path), path.string(), alpha);
 }
 
-std::vector<std::uint8_t> EncodeImage(const Image& image, const std::string& extension,
+std::vector<std::uint8_t> EncodeImage(const Image& image,
+                                      const std::string& extension,
                                       const std::string& destination) {
   EnableOpenExr();
-  if (image.empty()) throw Error::In(destination, "cannot write an empty image");
+  if (image.empty())
+    throw Error::In(destination, "cannot write an empty image");
   if (!image.AllFinite()) {
-    throw Error::In(destination, "image has NaN or infinite pixels; refusing to write it");
+    throw Error::In(destination,
+                    "image has NaN or infinite pixels; refusing to write it");
   }
   const std::string ext = Lower(extension);
   cv::Mat encoded_input;
@@ -178,7 +197,8 @@ void WriteImage(const std::filesystem::path& path, const Image& image) {
   const std::vector<std::uint8_t> bytes =
       EncodeImage(image, path.extension().string(), path.string());
   WriteFileAtomically(
-      path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()),
+                             bytes.size()));
 }
 
 }  // namespace pano4d

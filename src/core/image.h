@@ -23,7 +23,8 @@ class Image {
   static Image FromRgb32f(cv::Mat rgb);
   // Converts an OpenCV image as imread returns it: 8-bit, 16-bit or float,
   // with 1 (grey), 3 (BGR) or 4 (BGRA, alpha dropped) channels.
-  static Image FromOpenCV(const cv::Mat& bgr_or_grey, const std::string& source);
+  static Image FromOpenCV(const cv::Mat& bgr_or_grey,
+                          const std::string& source);
 
   int width() const { return mat_.cols; }
   int height() const { return mat_.rows; }
@@ -47,14 +48,15 @@ class Image {
 // IEND chunk, a JPEG without its end-of-image marker) is an error, not an
 // image with a grey tail. The optional `alpha` receives the alpha channel of
 // RGBA inputs as CV_32FC1 in [0, 1] (empty if there is none).
-Image DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& source,
-                  cv::Mat* alpha = nullptr);
+Image DecodeImage(const std::vector<std::uint8_t>& bytes,
+                  const std::string& source, cv::Mat* alpha = nullptr);
 Image ReadImage(const std::filesystem::path& path, cv::Mat* alpha = nullptr);
 
 // Encodes by extension: .png and .jpg/.jpeg as 8 bits (JPEG quality 95),
 // .exr as 32-bit float. Throws pano4d::Error if the image has NaN or Inf (a
 // silent NaN would become a black pixel), or the extension is unknown.
-std::vector<std::uint8_t> EncodeImage(const Image& image, const std::string& extension,
+std::vector<std::uint8_t> EncodeImage(const Image& image,
+                                      const std::string& extension,
                                       const std::string& destination);
 // Writes atomically (temporary name, then rename).
 void WriteImage(const std::filesystem::path& path, const Image& image);

@@ -25,7 +25,8 @@ Json ReadJson(const std::filesystem::path& path) {
   return ParseJson(ReadTextFile(path), path.string());
 }
 
-void WriteJson(const std::filesystem::path& path, const Json& value, int indent) {
+void WriteJson(const std::filesystem::path& path, const Json& value,
+               int indent) {
   WriteFileAtomically(path, value.dump(indent) + "\n");
 }
 
@@ -50,12 +51,14 @@ const Json& Field(const Json& object, const std::string& key,
 
 [[noreturn]] void WrongType(const Json& value, const std::string& key,
                             const std::string& source, const char* expected) {
-  throw Error(source, key, JsonValueForMessage(value),
-              std::string("expected ") + expected + ", got a " + value.type_name());
+  throw Error(
+      source, key, JsonValueForMessage(value),
+      std::string("expected ") + expected + ", got a " + value.type_name());
 }
 
 template <typename Int>
-Int ToInteger(const Json& value, const std::string& key, const std::string& source) {
+Int ToInteger(const Json& value, const std::string& key,
+              const std::string& source) {
   if (!value.is_number_integer()) WrongType(value, key, source, "an integer");
   if (value.is_number_unsigned()) {
     const auto u = value.get<std::uint64_t>();
@@ -65,7 +68,8 @@ Int ToInteger(const Json& value, const std::string& key, const std::string& sour
     return static_cast<Int>(u);
   }
   const auto i = value.get<std::int64_t>();
-  if (i < std::numeric_limits<Int>::min() || i > std::numeric_limits<Int>::max()) {
+  if (i < std::numeric_limits<Int>::min() ||
+      i > std::numeric_limits<Int>::max()) {
     throw Error(source, key, value.dump(), "integer out of range");
   }
   return static_cast<Int>(i);

@@ -28,19 +28,29 @@ void WriteJson(const std::filesystem::path& path, const Json& value,
 // Integers accept only JSON integers (640, not 640.0 or "640"); doubles accept
 // any JSON number but not NaN-like strings.
 template <typename T>
-T GetJson(const Json& object, const std::string& key, const std::string& source);
-template <> Json GetJson<Json>(const Json&, const std::string&, const std::string&);
-template <> bool GetJson<bool>(const Json&, const std::string&, const std::string&);
-template <> int GetJson<int>(const Json&, const std::string&, const std::string&);
-template <> std::int64_t GetJson<std::int64_t>(const Json&, const std::string&,
-                                               const std::string&);
-template <> double GetJson<double>(const Json&, const std::string&, const std::string&);
-template <> std::string GetJson<std::string>(const Json&, const std::string&,
-                                             const std::string&);
-template <> std::vector<double> GetJson<std::vector<double>>(const Json&, const std::string&,
-                                                             const std::string&);
-template <> std::vector<int> GetJson<std::vector<int>>(const Json&, const std::string&,
-                                                       const std::string&);
+T GetJson(const Json& object, const std::string& key,
+          const std::string& source);
+template <>
+Json GetJson<Json>(const Json&, const std::string&, const std::string&);
+template <>
+bool GetJson<bool>(const Json&, const std::string&, const std::string&);
+template <>
+int GetJson<int>(const Json&, const std::string&, const std::string&);
+template <>
+std::int64_t GetJson<std::int64_t>(const Json&, const std::string&,
+                                   const std::string&);
+template <>
+double GetJson<double>(const Json&, const std::string&, const std::string&);
+template <>
+std::string GetJson<std::string>(const Json&, const std::string&,
+                                 const std::string&);
+template <>
+std::vector<double> GetJson<std::vector<double>>(const Json&,
+                                                 const std::string&,
+                                                 const std::string&);
+template <>
+std::vector<int> GetJson<std::vector<int>>(const Json&, const std::string&,
+                                           const std::string&);
 
 // As GetJson, but returns `fallback` when the key is absent (a present key of
 // the wrong type is still an error).

@@ -37,12 +37,15 @@ char LevelLetter(LogLevel level) {
 std::string Timestamp() {
   const auto now = std::chrono::system_clock::now();
   const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto millis =
-      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          now.time_since_epoch())
+                          .count() %
+                      1000;
   std::tm local{};
   localtime_r(&seconds, &local);
   std::ostringstream out;
-  out << std::put_time(&local, "%H:%M:%S") << '.' << std::setw(3) << std::setfill('0') << millis;
+  out << std::put_time(&local, "%H:%M:%S") << '.' << std::setw(3)
+      << std::setfill('0') << millis;
   return out.str();
 }
 
@@ -69,18 +72,20 @@ void SetLogFile(const std::filesystem::path& path) {
   g_file.reset();
   if (path.empty()) return;
   auto file = std::make_unique<std::ofstream>(path, std::ios::app);
-  if (!*file) throw Error::In(path.string(), "cannot open the log file for appending");
+  if (!*file)
+    throw Error::In(path.string(), "cannot open the log file for appending");
   g_file = std::move(file);
 }
 
 void Log(LogLevel level, std::string_view message) {
   if (level < g_level.load()) return;
-  const std::string line =
-      std::string(1, LevelLetter(level)) + " " + Timestamp() + " " + std::string(message) + "\n";
+  const std::string line = std::string(1, LevelLetter(level)) + " " +
+                           Timestamp() + " " + std::string(message) + "\n";
   std::lock_guard<std::mutex> lock(g_mutex);
   std::ostream& sink = g_sink ? *g_sink : std::cerr;
   if (g_live_line == &sink) {
-    sink << "\r\033[K";  // erase the progress line; it redraws on its next update
+    sink << "\r\033[K";  // erase the progress line; it redraws on its next
+                         // update
     g_live_line = nullptr;
   }
   sink << line << std::flush;

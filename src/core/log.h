@@ -50,7 +50,7 @@ void WriteConsole(std::ostream& stream, std::string_view text, bool live);
 
 // PANO4D_LOG(kInfo) << "registered " << n << " frames";
 // The message is not even formatted when the level is below GetLogLevel().
-#define PANO4D_LOG(severity)                                          \
-  if (::pano4d::LogLevel::severity < ::pano4d::GetLogLevel()) {       \
-  } else                                                              \
+#define PANO4D_LOG(severity)                                    \
+  if (::pano4d::LogLevel::severity < ::pano4d::GetLogLevel()) { \
+  } else                                                        \
     ::pano4d::LogMessage(::pano4d::LogLevel::severity).stream()

@@ -13,11 +13,12 @@ namespace pano4d {
 namespace {
 
 constexpr int kBarWidth = 20;
-constexpr double kLiveRedrawSeconds = 0.1;   // smooth enough, cheap enough
+constexpr double kLiveRedrawSeconds = 0.1;  // smooth enough, cheap enough
 constexpr double kPlainIntervalSeconds = 10.0;
 
 bool IsTerminal(const std::ostream& out) {
-  if (&out == &std::cerr || &out == &std::clog) return ::isatty(STDERR_FILENO) == 1;
+  if (&out == &std::cerr || &out == &std::clog)
+    return ::isatty(STDERR_FILENO) == 1;
   if (&out == &std::cout) return ::isatty(STDOUT_FILENO) == 1;
   return false;
 }
@@ -36,11 +37,13 @@ std::string FormatRate(double per_second) {
 
 }  // namespace
 
-ProgressBar::ProgressBar(std::string label, std::int64_t total, std::ostream& out, Mode mode)
+ProgressBar::ProgressBar(std::string label, std::int64_t total,
+                         std::ostream& out, Mode mode)
     : label_(std::move(label)),
       total_(total),
       out_(out),
-      mode_(mode == Mode::kAuto ? (IsTerminal(out) ? Mode::kLive : Mode::kPlain) : mode),
+      mode_(mode == Mode::kAuto ? (IsTerminal(out) ? Mode::kLive : Mode::kPlain)
+                                : mode),
       start_(std::chrono::steady_clock::now()) {
   if (mode_ == Mode::kLive) Draw(false);
 }
@@ -48,7 +51,9 @@ ProgressBar::ProgressBar(std::string label, std::int64_t total, std::ostream& ou
 ProgressBar::~ProgressBar() { Finish(); }
 
 double ProgressBar::ElapsedSeconds() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                       start_)
+      .count();
 }
 
 void ProgressBar::Add(std::int64_t steps) {
@@ -60,8 +65,12 @@ void ProgressBar::Add(std::int64_t steps) {
     if (now - last_draw_s_ >= kLiveRedrawSeconds) Draw(false);
     return;
   }
-  const int decile = total_ > 0 ? static_cast<int>(std::min<std::int64_t>(done_ * 10 / total_, 10)) : 0;
-  if (decile > last_plain_decile_ || now - std::max(last_draw_s_, 0.0) >= kPlainIntervalSeconds) {
+  const int decile =
+      total_ > 0
+          ? static_cast<int>(std::min<std::int64_t>(done_ * 10 / total_, 10))
+          : 0;
+  if (decile > last_plain_decile_ ||
+      now - std::max(last_draw_s_, 0.0) >= kPlainIntervalSeconds) {
     last_plain_decile_ = std::max(decile, last_plain_decile_);
     Draw(false);
   }
@@ -77,9 +86,11 @@ void ProgressBar::Finish() {
 
 void ProgressBar::Draw(bool finished) {
   last_draw_s_ = ElapsedSeconds();
-  const std::string line = FormatLine(label_, done_, total_, last_draw_s_, status_, finished);
+  const std::string line =
+      FormatLine(label_, done_, total_, last_draw_s_, status_, finished);
   if (mode_ == Mode::kLive) {
-    internal::WriteConsole(out_, "\r\033[K" + line + (finished ? "\n" : ""), !finished);
+    internal::WriteConsole(out_, "\r\033[K" + line + (finished ? "\n" : ""),
+                           !finished);
   } else {
     internal::WriteConsole(out_, line + "\n", false);
   }
@@ -90,10 +101,11 @@ std::string ProgressBar::FormatDuration(double seconds) {
   const auto total = static_cast<long long>(std::llround(seconds));
   char buffer[32];
   if (total >= 3600) {
-    std::snprintf(buffer, sizeof(buffer), "%lld:%02lld:%02lld", total / 3600, total / 60 % 60,
-                  total % 60);
+    std::snprintf(buffer, sizeof(buffer), "%lld:%02lld:%02lld", total / 3600,
+                  total / 60 % 60, total % 60);
   } else {
-    std::snprintf(buffer, sizeof(buffer), "%02lld:%02lld", total / 60, total % 60);
+    std::snprintf(buffer, sizeof(buffer), "%02lld:%02lld", total / 60,
+                  total % 60);
   }
   return buffer;
 }
@@ -105,11 +117,14 @@ std::string ProgressBar::FormatLine(const std::string& label, std::int64_t done,
   out << label;
   const double rate = elapsed_s > 0 ? done / elapsed_s : 0.0;
   if (total > 0) {
-    const double fraction = std::clamp(static_cast<double>(done) / total, 0.0, 1.0);
+    const double fraction =
+        std::clamp(static_cast<double>(done) / total, 0.0, 1.0);
     const int filled = static_cast<int>(fraction * kBarWidth);
-    out << " [" << std::string(filled, '#') << std::string(kBarWidth - filled, '.') << "] ";
+    out << " [" << std::string(filled, '#')
+        << std::string(kBarWidth - filled, '.') << "] ";
     char percent[8];
-    std::snprintf(percent, sizeof(percent), "%3d%%", static_cast<int>(fraction * 100));
+    std::snprintf(percent, sizeof(percent), "%3d%%",
+                  static_cast<int>(fraction * 100));
     out << percent << "  " << done << "/" << total;
   } else {
     out << "  " << done << " it";

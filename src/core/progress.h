@@ -8,7 +8,8 @@
 namespace pano4d {
 
 // A progress bar for long loops, in the manner of tqdm:
-//   fit [##########..........]  50%  500/1000  41.2 it/s  ETA 00:12  loss 0.0123
+//   fit [##########..........]  50%  500/1000  41.2 it/s  ETA 00:12  loss
+//   0.0123
 // On a terminal the line is redrawn in place (at most every 0.1 s); when the
 // stream is not a terminal (a log file, CI) it prints plain lines instead, at
 // every 10% and at least every 10 s, so logs stay readable. Writes to
@@ -18,8 +19,8 @@ class ProgressBar {
   enum class Mode { kAuto, kLive, kPlain, kOff };
 
   // total <= 0: unknown length (counts and rate, no bar or ETA).
-  ProgressBar(std::string label, std::int64_t total, std::ostream& out = std::cerr,
-              Mode mode = Mode::kAuto);
+  ProgressBar(std::string label, std::int64_t total,
+              std::ostream& out = std::cerr, Mode mode = Mode::kAuto);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
@@ -34,8 +35,9 @@ class ProgressBar {
   Mode mode() const { return mode_; }
 
   // The line for a state; pure, for tests and custom displays.
-  static std::string FormatLine(const std::string& label, std::int64_t done, std::int64_t total,
-                                double elapsed_s, const std::string& status, bool finished);
+  static std::string FormatLine(const std::string& label, std::int64_t done,
+                                std::int64_t total, double elapsed_s,
+                                const std::string& status, bool finished);
   // "07:05", or "1:02:03" past an hour; "--:--" when not finite or negative.
   static std::string FormatDuration(double seconds);
 

@@ -21,12 +21,15 @@ std::string VectorText(const Eigen::VectorXd& v) {
 
 }  // namespace
 
-Rigid3d Rigid3d::FromColmap(const Eigen::Vector4d& qvec, const Eigen::Vector3d& tvec) {
+Rigid3d Rigid3d::FromColmap(const Eigen::Vector4d& qvec,
+                            const Eigen::Vector3d& tvec) {
   const double norm = qvec.norm();
   if (!qvec.allFinite() || !(norm > 0)) {
-    throw Error("pose", "qvec", VectorText(qvec), "must be a finite, non-zero quaternion");
+    throw Error("pose", "qvec", VectorText(qvec),
+                "must be a finite, non-zero quaternion");
   }
-  if (!tvec.allFinite()) throw Error("pose", "tvec", VectorText(tvec), "must be finite");
+  if (!tvec.allFinite())
+    throw Error("pose", "tvec", VectorText(tvec), "must be finite");
   const Eigen::Vector4d q = qvec / norm;
   return Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)), tvec);
 }
@@ -48,7 +51,8 @@ Eigen::Matrix<double, 3, 4> Rigid3d::ToMatrix() const {
 }
 
 Rigid3d operator*(const Rigid3d& a, const Rigid3d& b) {
-  return Rigid3d((a.rotation * b.rotation).normalized(), a.rotation * b.translation + a.translation);
+  return Rigid3d((a.rotation * b.rotation).normalized(),
+                 a.rotation * b.translation + a.translation);
 }
 
 Eigen::Vector3d CameraCenter(const Rigid3d& cam_from_world) {
@@ -58,19 +62,24 @@ Eigen::Vector3d CameraCenter(const Rigid3d& cam_from_world) {
 Sim3d Sim3d::FromMatrix(const Eigen::Matrix4d& matrix) {
   std::ostringstream text;
   text << matrix.format(Eigen::IOFormat(Eigen::StreamPrecision, 0, " ", "; "));
-  if (!matrix.allFinite()) throw Error("sim3", "matrix", text.str(), "must be finite");
+  if (!matrix.allFinite())
+    throw Error("sim3", "matrix", text.str(), "must be finite");
   const Eigen::Matrix3d sr = matrix.topLeftCorner<3, 3>();
   const double det = sr.determinant();
   if (!(det > 0)) {
-    throw Error("sim3", "matrix", text.str(), "determinant must be positive (no reflection)");
+    throw Error("sim3", "matrix", text.str(),
+                "determinant must be positive (no reflection)");
   }
   const double scale = std::cbrt(det);
   const Eigen::Matrix3d r = sr / scale;
-  if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), kRotationTolerance) ||
+  if (!(r.transpose() * r)
+           .isApprox(Eigen::Matrix3d::Identity(), kRotationTolerance) ||
       !matrix.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1))) {
-    throw Error("sim3", "matrix", text.str(), "is not a similarity [sR t; 0 1]");
+    throw Error("sim3", "matrix", text.str(),
+                "is not a similarity [sR t; 0 1]");
   }
-  return Sim3d(scale, Eigen::Quaterniond(r).normalized(), matrix.topRightCorner<3, 1>());
+  return Sim3d(scale, Eigen::Quaterniond(r).normalized(),
+               matrix.topRightCorner<3, 1>());
 }
 
 Sim3d Sim3d::Inverse() const {
@@ -89,8 +98,10 @@ Rigid3d Sim3d::TransformPose(const Rigid3d& cam_from_a) const {
   // x_cam = R_c x_a + t_c and x_a = (R^T (x_b - t)) / s give
   // x_cam = R_c R^T x_b / s + (t_c - R_c R^T t / s); a camera frame keeps its
   // metric only up to the scale, so multiply through by s.
-  const Eigen::Quaterniond rotation_b = (cam_from_a.rotation * rotation.conjugate()).normalized();
-  return Rigid3d(rotation_b, scale * cam_from_a.translation - rotation_b * translation);
+  const Eigen::Quaterniond rotation_b =
+      (cam_from_a.rotation * rotation.conjugate()).normalized();
+  return Rigid3d(rotation_b,
+                 scale * cam_from_a.translation - rotation_b * translation);
 }
 
 Sim3d operator*(const Sim3d& a, const Sim3d& b) {

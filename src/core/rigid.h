@@ -19,12 +19,14 @@ struct Rigid3d {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 
   Rigid3d() = default;
-  Rigid3d(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translation)
+  Rigid3d(const Eigen::Quaterniond& rotation,
+          const Eigen::Vector3d& translation)
       : rotation(rotation), translation(translation) {}
 
   // From COLMAP's qvec (w, x, y, z; need not be unit, is normalized) and
   // tvec. Throws pano4d::Error for a zero or non-finite qvec.
-  static Rigid3d FromColmap(const Eigen::Vector4d& qvec_wxyz, const Eigen::Vector3d& tvec);
+  static Rigid3d FromColmap(const Eigen::Vector4d& qvec_wxyz,
+                            const Eigen::Vector3d& tvec);
   Eigen::Vector4d ColmapQvec() const;  // (w, x, y, z)
 
   Eigen::Vector3d operator*(const Eigen::Vector3d& point) const {
@@ -47,7 +49,8 @@ struct Sim3d {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 
   Sim3d() = default;
-  Sim3d(double scale, const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translation)
+  Sim3d(double scale, const Eigen::Quaterniond& rotation,
+        const Eigen::Vector3d& translation)
       : scale(scale), rotation(rotation), translation(translation) {}
 
   // From a 4x4 matrix [sR t; 0 1], as Eigen::umeyama returns. Throws

@@ -7,7 +7,8 @@ namespace pano4d {
 double ProcessCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  return static_cast<double>(ts.tv_sec) +
+         1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 void Timer::Restart() {
@@ -16,7 +17,9 @@ void Timer::Restart() {
 }
 
 double Timer::WallSeconds() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                       wall_start_)
+      .count();
 }
 
 double Timer::CpuSeconds() const { return ProcessCpuSeconds() - cpu_start_; }

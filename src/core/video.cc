@@ -13,25 +13,31 @@ struct VideoReader::Capture {
 };
 
 void VideoReadOptions::Check() const {
-  if (stride < 1) throw Error("video options", "stride", std::to_string(stride), "must be >= 1");
+  if (stride < 1)
+    throw Error("video options", "stride", std::to_string(stride),
+                "must be >= 1");
   if (max_frames < 0) {
     throw Error("video options", "max_frames", std::to_string(max_frames),
                 "must be >= 0 (0 means no limit)");
   }
 }
 
-VideoReader::VideoReader(const std::filesystem::path& path, VideoReadOptions options)
+VideoReader::VideoReader(const std::filesystem::path& path,
+                         VideoReadOptions options)
     : path_(path), options_(options), capture_(std::make_unique<Capture>()) {
   options_.Check();
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error::In(path.string(), "does not exist");
+  if (!std::filesystem::exists(path, ec))
+    throw Error::In(path.string(), "does not exist");
   if (std::filesystem::is_directory(path, ec)) {
     throw Error::In(path.string(), "is a directory, expected a video file");
   }
-  if (!capture_->capture.open(path.string(), cv::CAP_ANY) || !capture_->capture.isOpened()) {
-    throw Error::In(path.string(),
-                    "OpenCV cannot open it as a video (corrupt file or unsupported codec; "
-                    "`ffprobe` tells which)");
+  if (!capture_->capture.open(path.string(), cv::CAP_ANY) ||
+      !capture_->capture.isOpened()) {
+    throw Error::In(
+        path.string(),
+        "OpenCV cannot open it as a video (corrupt file or unsupported codec; "
+        "`ffprobe` tells which)");
   }
   cv::VideoCapture& cap = capture_->capture;
   info_.width = static_cast<int>(cap.get(cv::CAP_PROP_FRAME_WIDTH));
@@ -39,7 +45,8 @@ VideoReader::VideoReader(const std::filesystem::path& path, VideoReadOptions opt
   const double fps = cap.get(cv::CAP_PROP_FPS);
   info_.fps = std::isfinite(fps) && fps > 0 ? fps : 0.0;
   const double count = cap.get(cv::CAP_PROP_FRAME_COUNT);
-  info_.frame_count = std::isfinite(count) && count > 0 ? static_cast<std::int64_t>(count) : 0;
+  info_.frame_count =
+      std::isfinite(count) && count > 0 ? static_cast<std::int64_t>(count) : 0;
 }
 
 VideoReader::~VideoReader() = default;
@@ -54,19 +61,22 @@ bool VideoReader::Next(Image* frame, std::int64_t* source_index) {
   }
   cv::Mat bgr;
   if (!cap.read(bgr) || bgr.empty()) return false;
-  *frame = Image::FromOpenCV(bgr, path_.string() + " frame " + std::to_string(next_index_));
+  *frame = Image::FromOpenCV(
+      bgr, path_.string() + " frame " + std::to_string(next_index_));
   if (source_index) *source_index = next_index_;
   ++next_index_;
   ++returned_;
   return true;
 }
 
-std::vector<Image> ReadVideoFrames(const std::filesystem::path& path, VideoReadOptions options) {
+std::vector<Image> ReadVideoFrames(const std::filesystem::path& path,
+                                   VideoReadOptions options) {
   VideoReader reader(path, options);
   std::vector<Image> frames;
   Image frame;
   while (reader.Next(&frame)) frames.push_back(frame);
-  if (frames.empty()) throw Error::In(path.string(), "contains no readable frames");
+  if (frames.empty())
+    throw Error::In(path.string(), "contains no readable frames");
   return frames;
 }
 

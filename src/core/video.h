@@ -13,13 +13,15 @@ namespace pano4d {
 struct VideoInfo {
   int width = 0;
   int height = 0;
-  double fps = 0.0;                // 0 when the container does not say
-  std::int64_t frame_count = 0;    // as the container reports it; may be an estimate
+  double fps = 0.0;  // 0 when the container does not say
+  std::int64_t frame_count =
+      0;  // as the container reports it; may be an estimate
 };
 
 struct VideoReadOptions {
-  int stride = 1;       // keep every stride-th frame (frames 0, stride, 2 stride, ...)
-  int max_frames = 0;   // stop after this many kept frames; 0 = no limit
+  int stride =
+      1;  // keep every stride-th frame (frames 0, stride, 2 stride, ...)
+  int max_frames = 0;  // stop after this many kept frames; 0 = no limit
 
   // Throws pano4d::Error naming the field ("stride" must be >= 1,
   // "max_frames" >= 0).

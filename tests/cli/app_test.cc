@@ -37,7 +37,9 @@ Result RunCli(std::vector<std::string> args) {
   return r;
 }
 
-int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+int Lines(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
 
 TEST(CliTest, VersionAndHelp) {
   const Result version = RunCli({"--version"});
@@ -45,8 +47,9 @@ TEST(CliTest, VersionAndHelp) {
   EXPECT_EQ(version.out, "pano4d 0.1.0\n");
   const Result help = RunCli({"--help"});
   EXPECT_EQ(help.status, kExitOk);
-  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
-                           "dataset", "run", "demo", "bench", "make-pairs", "inspect"}) {
+  for (const char* name :
+       {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
+        "dataset", "run", "demo", "bench", "make-pairs", "inspect"}) {
     EXPECT_NE(help.out.find(name), std::string::npos) << name;
   }
   const Result bare = RunCli({});
@@ -54,8 +57,9 @@ TEST(CliTest, VersionAndHelp) {
 }
 
 TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
-                           "dataset", "run", "demo", "make-pairs"}) {
+  for (const char* name :
+       {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
+        "dataset", "run", "demo", "make-pairs"}) {
     const Result r = RunCli({name, "--workspace", "ws"});
     EXPECT_EQ(r.status, kExitNotBuilt) << name;
     EXPECT_EQ(Lines(r.err), 1) << r.err;
@@ -70,7 +74,8 @@ TEST(CliTest, UsageErrorsExitSixtyFour) {
   EXPECT_EQ(RunCli({"--no-such-flag"}).status, kExitUsage);
   EXPECT_EQ(RunCli({"inspect"}).status, kExitUsage);  // missing path
   EXPECT_EQ(RunCli({"bench"}).status, kExitUsage);    // missing bench name
-  EXPECT_EQ(RunCli({"--log-level", "loud", "inspect", "x.png"}).status, kExitUsage);
+  EXPECT_EQ(RunCli({"--log-level", "loud", "inspect", "x.png"}).status,
+            kExitUsage);
 }
 
 TEST(CliTest, InspectImageAndCamera) {
@@ -83,7 +88,8 @@ TEST(CliTest, InspectImageAndCamera) {
   EXPECT_EQ(j["width"], 20);
   EXPECT_EQ(j["height"], 10);
 
-  const Camera camera{CameraModelId::kOpenCV, 640, 480, {800, 800, 320, 240, -0.4, 0, 0, 0}};
+  const Camera camera{
+      CameraModelId::kOpenCV, 640, 480, {800, 800, 320, 240, -0.4, 0, 0, 0}};
   WriteJson(dir / "cam.json", CameraToJson(camera));
   const Result cam = RunCli({"inspect", (dir / "cam.json").string()});
   ASSERT_EQ(cam.status, kExitOk) << cam.err;
@@ -96,11 +102,13 @@ TEST(CliTest, InspectImageAndCamera) {
 TEST(CliTest, CorruptInputsGiveOneLineNamingTheFile) {
   testing::TempDir dir;
   testing::WriteTruncatedPng(dir / "cut.png");
-  testing::WriteText(dir / "cam.json",
-                     R"({"model": "PINHOLE", "width": "640", "height": 480, "params": [1, 1, 1, 1]})");
+  testing::WriteText(
+      dir / "cam.json",
+      R"({"model": "PINHOLE", "width": "640", "height": 480, "params": [1, 1, 1, 1]})");
   const std::vector<std::pair<std::string, std::string>> cases = {
       {(dir / "cut.png").string(), "truncated PNG"},
-      {(dir / "cam.json").string(), "field 'width' = \"640\": expected an integer"},
+      {(dir / "cam.json").string(),
+       "field 'width' = \"640\": expected an integer"},
       {(dir / "missing.mp4").string(), "does not exist"},
   };
   for (const auto& [path, problem] : cases) {
@@ -114,7 +122,8 @@ TEST(CliTest, CorruptInputsGiveOneLineNamingTheFile) {
 }
 
 TEST(CliTest, BenchCameraReportsExactRoundTripsForEveryModel) {
-  const Result r = RunCli({"bench", "camera", "--grid", "16", "--min-seconds", "0.001", "--json"});
+  const Result r = RunCli(
+      {"bench", "camera", "--grid", "16", "--min-seconds", "0.001", "--json"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   std::istringstream lines(r.out);
   std::string line;

@@ -20,8 +20,8 @@ struct Result {
 
 Result RunBinary(const std::string& args, const testing::TempDir& dir) {
   const std::string err_path = (dir / "stderr.txt").string();
-  const std::string command = std::string(PANO4D_BINARY_DIR) + "/pano4d " + args +
-                              " > /dev/null 2> '" + err_path + "'";
+  const std::string command = std::string(PANO4D_BINARY_DIR) + "/pano4d " +
+                              args + " > /dev/null 2> '" + err_path + "'";
   const int raw = std::system(command.c_str());
   std::ifstream in(err_path);
   std::stringstream err;
@@ -32,11 +32,14 @@ Result RunBinary(const std::string& args, const testing::TempDir& dir) {
 TEST(Pano4dBinaryTest, CorruptInputsFailWithOneLineAndNonZeroStatus) {
   testing::TempDir dir;
   testing::WriteTruncatedPng(dir / "cut.png");
-  testing::WriteText(dir / "cam.json", R"({"model": "PINHOLE", "width": 640, "height": 480,
+  testing::WriteText(dir / "cam.json",
+                     R"({"model": "PINHOLE", "width": 640, "height": 480,
                                            "params": [500, "500", 320, 240]})");
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {(dir / "cut.png").string(), ": truncated PNG: the IEND chunk is missing"},
-      {(dir / "cam.json").string(), ": field 'params[1]' = \"500\": expected a number"},
+      {(dir / "cut.png").string(),
+       ": truncated PNG: the IEND chunk is missing"},
+      {(dir / "cam.json").string(),
+       ": field 'params[1]' = \"500\": expected a number"},
       {(dir / "gone.mp4").string(), ": does not exist"},
   };
   for (const auto& [path, problem] : cases) {
@@ -52,7 +55,8 @@ TEST(Pano4dBinaryTest, VersionAndNotBuilt) {
   EXPECT_EQ(RunBinary("--version", dir).status, 0);
   const Result r = RunBinary("demo", dir);
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("pano4d demo: not built yet"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("pano4d demo: not built yet"), std::string::npos)
+      << r.err;
 }
 
 }  // namespace

@@ -16,7 +16,8 @@ TEST(MeasureRoundTripTest, SamplesEdgeToEdgeAndCountsFailures) {
   // x_d = x (1 - 0.4 r^2) has no preimage beyond r_d = 0.609. At f = 600 the
   // corners (r_d = 0.667) lie past that, the edge midpoints (0.533, 0.4) do
   // not: exactly the four corners fail.
-  const Camera folded{CameraModelId::kSimpleRadial, 640, 480, {600, 320, 240, -0.4}};
+  const Camera folded{
+      CameraModelId::kSimpleRadial, 640, 480, {600, 320, 240, -0.4}};
   const RoundTripStats stats = MeasureRoundTrip(folded, 2, 2);
   EXPECT_EQ(stats.samples, 9);
   EXPECT_EQ(stats.failures, 4);  // the four corners

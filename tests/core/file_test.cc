@@ -12,7 +12,9 @@ using testing::TempDir;
 
 int CountEntries(const std::filesystem::path& dir) {
   int n = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir)) ++n;
+  for ([[maybe_unused]] const auto& entry :
+       std::filesystem::directory_iterator(dir))
+    ++n;
   return n;
 }
 
@@ -40,7 +42,8 @@ TEST(FileTest, FailedWriteKeepsThePreviousVersion) {
   EXPECT_THROW(WriteAtomically(path,
                                [](const std::filesystem::path& tmp) {
                                  WriteFileAtomically(tmp, "partial");
-                                 throw Error::In(tmp.string(), "killed half way");
+                                 throw Error::In(tmp.string(),
+                                                 "killed half way");
                                }),
                Error);
   EXPECT_EQ(ReadTextFile(path), "good");

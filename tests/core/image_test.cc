@@ -19,7 +19,8 @@ Image Gradient(int width, int height) {
   Image image(width, height);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
-      image.at(x, y) = cv::Vec3f(float(x) / (width - 1), float(y) / (height - 1), 0.25f);
+      image.at(x, y) =
+          cv::Vec3f(float(x) / (width - 1), float(y) / (height - 1), 0.25f);
     }
   }
   return image;
@@ -70,7 +71,8 @@ TEST(ImageTest, ChannelsAreRgbInMemoryAndBgrOnDisk) {
   Image red(4, 4);
   red.mat().setTo(cv::Scalar(1, 0, 0));
   WriteImage(dir / "red.png", red);
-  const cv::Mat raw = cv::imread((dir / "red.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat raw =
+      cv::imread((dir / "red.png").string(), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(raw.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 255));
   EXPECT_EQ(ReadImage(dir / "red.png").at(1, 1), cv::Vec3f(1, 0, 0));
 }
@@ -94,15 +96,19 @@ TEST(ImageTest, TruncatedPngIsAnErrorNamingTheFile) {
   TempDir dir;
   testing::WriteTruncatedPng(dir / "cut.png");
   const std::string message = ErrorOf(dir / "cut.png");
-  EXPECT_EQ(message.rfind((dir / "cut.png").string() + ": truncated PNG", 0), 0u) << message;
+  EXPECT_EQ(message.rfind((dir / "cut.png").string() + ": truncated PNG", 0),
+            0u)
+      << message;
 }
 
 TEST(ImageTest, TruncatedJpegIsAnError) {
   TempDir dir;
-  const std::vector<std::uint8_t> bytes = EncodeImage(Gradient(64, 48), ".jpg", "mem");
+  const std::vector<std::uint8_t> bytes =
+      EncodeImage(Gradient(64, 48), ".jpg", "mem");
   {
     std::ofstream out(dir / "cut.jpg", std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), bytes.size() * 2 / 3);
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              bytes.size() * 2 / 3);
   }
   EXPECT_NE(ErrorOf(dir / "cut.jpg").find("truncated JPEG"), std::string::npos);
 }
@@ -111,9 +117,11 @@ TEST(ImageTest, GarbageEmptyAndMissingFilesAreErrors) {
   TempDir dir;
   testing::WriteText(dir / "text.png", "this is not an image at all");
   testing::WriteText(dir / "empty.png", "");
-  EXPECT_NE(ErrorOf(dir / "text.png").find("cannot be decoded"), std::string::npos);
+  EXPECT_NE(ErrorOf(dir / "text.png").find("cannot be decoded"),
+            std::string::npos);
   EXPECT_NE(ErrorOf(dir / "empty.png").find("is empty"), std::string::npos);
-  EXPECT_NE(ErrorOf(dir / "missing.png").find("does not exist"), std::string::npos);
+  EXPECT_NE(ErrorOf(dir / "missing.png").find("does not exist"),
+            std::string::npos);
 }
 
 TEST(ImageTest, NonFiniteImagesAreNotWritten) {
@@ -129,7 +137,8 @@ TEST(ImageTest, NonFiniteImagesAreNotWritten) {
 
 TEST(ImageTest, WrapsOnlyFloatRgb) {
   EXPECT_THROW(Image::FromRgb32f(cv::Mat(2, 2, CV_8UC3)), Error);
-  const Image image = Image::FromRgb32f(cv::Mat(2, 3, CV_32FC3, cv::Scalar(0.5, 0.5, 0.5)));
+  const Image image =
+      Image::FromRgb32f(cv::Mat(2, 3, CV_32FC3, cv::Scalar(0.5, 0.5, 0.5)));
   EXPECT_EQ(image.width(), 3);
   EXPECT_EQ(image.height(), 2);
 }

@@ -18,8 +18,12 @@ std::string MessageOf(const std::function<void()>& f) {
 }
 
 TEST(JsonTest, SyntaxErrorNamesSourceAndPosition) {
-  const std::string message = MessageOf([] { ParseJson("{\"a\": 1,", "scene.json"); });
-  EXPECT_EQ(message.rfind("scene.json: not valid JSON (parse error at line 1, column 9", 0), 0u)
+  const std::string message =
+      MessageOf([] { ParseJson("{\"a\": 1,", "scene.json"); });
+  EXPECT_EQ(
+      message.rfind(
+          "scene.json: not valid JSON (parse error at line 1, column 9", 0),
+      0u)
       << message;
 }
 
@@ -32,7 +36,8 @@ TEST(JsonTest, TypedFieldsAreStrict) {
   EXPECT_EQ(GetJson<double>(j, "f", "cam.json"), 1.5);
   EXPECT_EQ(GetJson<std::string>(j, "s", "cam.json"), "640");
   EXPECT_TRUE(GetJson<bool>(j, "b", "cam.json"));
-  EXPECT_EQ(GetJson<std::vector<double>>(j, "v", "cam.json"), (std::vector<double>{1, 2.5}));
+  EXPECT_EQ(GetJson<std::vector<double>>(j, "v", "cam.json"),
+            (std::vector<double>{1, 2.5}));
 
   EXPECT_EQ(MessageOf([&] { GetJson<int>(j, "s", "cam.json"); }),
             "cam.json: field 's' = \"640\": expected an integer, got a string");
@@ -40,12 +45,14 @@ TEST(JsonTest, TypedFieldsAreStrict) {
             "cam.json: field 'f' = 1.5: expected an integer, got a number");
   EXPECT_EQ(MessageOf([&] { GetJson<int>(j, "missing", "cam.json"); }),
             "cam.json: field 'missing': missing");
-  EXPECT_EQ(MessageOf([&] { GetJson<std::vector<double>>(j, "bad", "cam.json"); }),
-            "cam.json: field 'bad[1]' = \"x\": expected a number");
+  EXPECT_EQ(
+      MessageOf([&] { GetJson<std::vector<double>>(j, "bad", "cam.json"); }),
+      "cam.json: field 'bad[1]' = \"x\": expected a number");
   EXPECT_EQ(MessageOf([&] { GetJson<bool>(j, "w", "cam.json"); }),
             "cam.json: field 'w' = 640: expected true or false, got a number");
   EXPECT_NE(MessageOf([&] { GetJson<int>(j, "big", "cam.json"); }), "no error");
-  EXPECT_NE(MessageOf([&] { GetJson<int>(Json::array(), "w", "cam.json"); }), "no error");
+  EXPECT_NE(MessageOf([&] { GetJson<int>(Json::array(), "w", "cam.json"); }),
+            "no error");
 }
 
 TEST(JsonTest, OptionalFieldsFallBackOnlyWhenAbsent) {

@@ -20,8 +20,9 @@ class LogTest : public ::testing::Test {
 
 TEST_F(LogTest, LineFormat) {
   PANO4D_LOG(kInfo) << "registered " << 42 << " frames";
-  EXPECT_TRUE(std::regex_match(sink_.str(),
-                               std::regex(R"(I \d\d:\d\d:\d\d\.\d\d\d registered 42 frames\n)")))
+  EXPECT_TRUE(std::regex_match(
+      sink_.str(),
+      std::regex(R"(I \d\d:\d\d:\d\d\.\d\d\d registered 42 frames\n)")))
       << sink_.str();
 }
 

@@ -15,8 +15,10 @@ int CountLines(const std::string& text) {
 }
 
 TEST(ProgressTest, LineShowsBarCountRateAndEta) {
-  EXPECT_EQ(ProgressBar::FormatLine("fit", 500, 1000, 10.0, "loss 0.0123", false),
-            "fit [##########..........]  50%  500/1000  50.0 it/s  ETA 00:10  loss 0.0123");
+  EXPECT_EQ(
+      ProgressBar::FormatLine("fit", 500, 1000, 10.0, "loss 0.0123", false),
+      "fit [##########..........]  50%  500/1000  50.0 it/s  ETA 00:10  loss "
+      "0.0123");
   EXPECT_EQ(ProgressBar::FormatLine("fit", 1000, 1000, 125.0, "", true),
             "fit [####################] 100%  1000/1000  8.0 it/s  in 02:05");
   EXPECT_EQ(ProgressBar::FormatLine("frames", 30, 0, 2.0, "", false),
@@ -62,7 +64,8 @@ TEST(ProgressTest, LiveModeRedrawsInPlaceAndLogClearsTheLine) {
   SetLogSink(nullptr);
   const std::string text = out.str();
   EXPECT_EQ(text.rfind("\r\033[Kfit [", 0), 0u);
-  EXPECT_NE(text.find("\r\033[KI "), std::string::npos);  // the bar line is erased first
+  EXPECT_NE(text.find("\r\033[KI "),
+            std::string::npos);  // the bar line is erased first
   EXPECT_EQ(text.back(), '\n');
   EXPECT_EQ(CountLines(text), 2);  // the log line and the final bar line
 }

@@ -12,14 +12,16 @@ namespace {
 
 std::filesystem::path DataDir() {
   const char* env = std::getenv("PANO4D_DATA_DIR");
-  return env ? std::filesystem::path(env) : std::filesystem::path(PANO4D_DATA_DIR);
+  return env ? std::filesystem::path(env)
+             : std::filesystem::path(PANO4D_DATA_DIR);
 }
 
-#define REQUIRE_REAL_DATA(relative)                                                        \
-  const std::filesystem::path data_path = DataDir() / (relative);                          \
-  if (!std::filesystem::exists(data_path)) {                                               \
-    GTEST_SKIP() << "REAL DATA MISSING: " << data_path                                     \
-                 << " not found; this real-data test did not run (set PANO4D_DATA_DIR)"; \
+#define REQUIRE_REAL_DATA(relative)                                     \
+  const std::filesystem::path data_path = DataDir() / (relative);       \
+  if (!std::filesystem::exists(data_path)) {                            \
+    GTEST_SKIP() << "REAL DATA MISSING: " << data_path                  \
+                 << " not found; this real-data test did not run (set " \
+                    "PANO4D_DATA_DIR)";                                 \
   }
 
 TEST(VideoRealDataTest, LadyRunningDecodesWithStrideAndLimit) {
@@ -40,7 +42,8 @@ TEST(VideoRealDataTest, LadyRunningDecodesWithStrideAndLimit) {
 
 TEST(VideoRealDataTest, FirstFrameMatchesTheShippedJpeg) {
   REQUIRE_REAL_DATA("real/lady-running.mp4");
-  const std::vector<Image> frames = ReadVideoFrames(data_path, {.max_frames = 1});
+  const std::vector<Image> frames =
+      ReadVideoFrames(data_path, {.max_frames = 1});
   const Image jpeg = ReadImage(DataDir() / "real/lady-running/00000.jpg");
   ASSERT_EQ(frames[0].width(), jpeg.width());
   ASSERT_EQ(frames[0].height(), jpeg.height());

@@ -15,7 +15,8 @@ using testing::TempDir;
 // frame tells its own index.
 std::filesystem::path WriteCountingVideo(const TempDir& dir, int frames) {
   const auto path = dir / "count.avi";
-  cv::VideoWriter writer(path.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0,
+  cv::VideoWriter writer(path.string(),
+                         cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0,
                          cv::Size(64, 48));
   EXPECT_TRUE(writer.isOpened());
   for (int i = 0; i < frames; ++i) {
@@ -60,14 +61,16 @@ TEST(VideoTest, MissingAndUnreadableVideosNameThePath) {
     VideoReader reader(dir / "nope.mp4");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), (dir / "nope.mp4").string() + ": does not exist");
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "nope.mp4").string() + ": does not exist");
   }
   testing::WriteText(dir / "fake.mp4", "not a video");
   try {
     VideoReader reader(dir / "fake.mp4");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot open it as a video"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("cannot open it as a video"),
+              std::string::npos);
   }
 }
 

@@ -23,7 +23,8 @@ TempDir::~TempDir() {
 void WriteTruncatedPng(const std::filesystem::path& path) {
   Image image(32, 24);
   image.mat().setTo(cv::Scalar(0.2, 0.5, 0.8));
-  const std::vector<std::uint8_t> bytes = EncodeImage(image, ".png", path.string());
+  const std::vector<std::uint8_t> bytes =
+      EncodeImage(image, ".png", path.string());
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()),
             static_cast<std::streamsize>(bytes.size() / 2));

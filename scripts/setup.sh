@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Installs the Debian packages pano4d needs (only those missing), then
+# configures and builds Release into build/ (ccache when present).
+# Idempotent and quiet: a second run installs nothing and rebuilds nothing.
+#   PANO4D_BUILD_DIR  build directory (default: build)
+#   PANO4D_JOBS       parallel compile jobs (default: nproc)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+BUILD_DIR=${PANO4D_BUILD_DIR:-build}
+JOBS=${PANO4D_JOBS:-$(nproc)}
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config ccache git
+  libeigen3-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev libcli11-dev
+  libceres-dev libpcl-dev libflann-dev libtbb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  colmap
+)
+
+missing=()
+for package in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+    missing+=("$package")
+done
+
+if ((${#missing[@]})); then
+  SUDO=()
+  if [[ $EUID -ne 0 ]]; then
+    command -v sudo >/dev/null || {
+      echo "pano4d setup: need root (or sudo) to install: ${missing[*]}" >&2
+      exit 1
+    }
+    SUDO=(sudo)
+  fi
+  log=$(mktemp -t pano4d-apt.XXXXXX.log)
+  echo "pano4d setup: installing ${#missing[@]} Debian packages: ${missing[*]} (log: $log)"
+  start=$SECONDS
+  if ! { "${SUDO[@]}" apt-get update -qq &&
+         "${SUDO[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+           --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+    tail -n 30 "$log" >&2
+    echo "pano4d setup: apt-get failed; the full log is $log" >&2
+    exit 1
+  fi
+  echo "pano4d setup: packages installed in $((SECONDS - start)) s"
+fi
+
+start=$SECONDS
+mkdir -p "$BUILD_DIR"
+if ! cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >"$BUILD_DIR/configure.log" 2>&1; then
+  tail -n 30 "$BUILD_DIR/configure.log" >&2
+  echo "pano4d setup: CMake configure failed; the full log is $BUILD_DIR/configure.log" >&2
+  exit 1
+fi
+if ! cmake --build "$BUILD_DIR" -j "$JOBS" >"$BUILD_DIR/build.log" 2>&1; then
+  grep -E "error|Error" "$BUILD_DIR/build.log" | head -n 30 >&2 || tail -n 30 "$BUILD_DIR/build.log" >&2
+  echo "pano4d setup: build failed; the full log is $BUILD_DIR/build.log" >&2
+  exit 1
+fi
+echo "pano4d setup: $("$BUILD_DIR/pano4d" --version) built in $BUILD_DIR/ in $((SECONDS - start)) s ($JOBS jobs)"
