@@ -7,6 +7,7 @@
 #include <unsupported/Eigen/AutoDiff>
 
 #include "src/core/error.h"
+#include "src/core/json.h"
 
 namespace pano4d {
 namespace {
@@ -360,6 +361,13 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
   const CameraModelInfo& model = info();
   const Eigen::Vector2d target((pixel.x() - principal_x()) / focal_x(),
                                (pixel.y() - principal_y()) / focal_y());
+  if (!HasDistortion()) {
+    result.normalized = target;
+    result.ray = Eigen::Vector3d(target.x(), target.y(), 1.0).normalized();
+    result.status = UnprojectStatus::kOk;
+    return result;
+  }
+
   const double* k = params.data() + ExtraOffset(model);
   const auto distort = [&](const auto& u, const auto& v, auto* ud, auto* vd) {
     Distort(model_id, k, u, v, ud, vd);
@@ -377,15 +385,14 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
   Eigen::Vector2d x = target;
   Eigen::Matrix2d jacobian;
   double residual = 0.0;
-  for (result.iterations = 0; result.iterations < kMaxUndistortIterations;
-       ++result.iterations) {
+  for (result.iterations = 0;; ++result.iterations) {
     const Eigen::Vector2d f = EvaluateWithJacobian(distort, x, &jacobian);
     residual = (f - target).norm();
-    if (!std::isfinite(residual)) break;
-    if (residual <= kUndistortStopTolerance * scale) break;
-    if (!(jacobian.determinant() > 0)) {
-      result.status = UnprojectStatus::kOutsideDomain;
-      return result;
+    if (!std::isfinite(residual) ||
+        residual <= kUndistortStopTolerance * scale ||
+        result.iterations == kMaxUndistortIterations ||
+        !(jacobian.determinant() > 0)) {
+      break;
     }
     const Eigen::Vector2d step = jacobian.inverse() * (f - target);
     double t = 1.0;
@@ -400,23 +407,20 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
     if (!improved) break;  // at the floating-point floor, or stuck
   }
 
-  EvaluateWithJacobian(distort, x, &jacobian);
-  residual = residual_at(x);
-  if (!std::isfinite(residual) || residual > kUndistortTolerance * scale) {
-    result.status = UnprojectStatus::kNotConverged;
+  // Here `jacobian` and `residual` belong to the final x.
+  const auto fail = [&result](UnprojectStatus status) {
+    result.status = status;
     return result;
-  }
-  if (!(jacobian.determinant() > 0)) {
-    result.status = UnprojectStatus::kOutsideDomain;
-    return result;
-  }
+  };
+  if (!std::isfinite(residual)) return fail(UnprojectStatus::kNotConverged);
+  if (!(jacobian.determinant() > 0))
+    return fail(UnprojectStatus::kOutsideDomain);
+  if (residual > kUndistortTolerance * scale)
+    return fail(UnprojectStatus::kNotConverged);
 
   if (model.fisheye) {
     const double theta = x.norm();
-    if (theta >= kMaxFisheyeAngle) {
-      result.status = UnprojectStatus::kOutsideDomain;
-      return result;
-    }
+    if (theta >= kMaxFisheyeAngle) return fail(UnprojectStatus::kOutsideDomain);
     const Eigen::Vector2d axis = theta > kFisheyeAxisEpsilon
                                      ? Eigen::Vector2d(x / theta)
                                      : Eigen::Vector2d::Zero();
@@ -459,14 +463,14 @@ Camera Camera::Rescaled(int new_width, int new_height) const {
   return out;
 }
 
-Json CameraToJson(const Camera& camera) {
+nlohmann::json CameraToJson(const Camera& camera) {
   return Json{{"model", std::string(camera.info().name)},
               {"width", camera.width},
               {"height", camera.height},
               {"params", camera.params}};
 }
 
-Camera CameraFromJson(const Json& json, const std::string& source) {
+Camera CameraFromJson(const nlohmann::json& json, const std::string& source) {
   Camera camera;
   const std::string name = GetJson<std::string>(json, "model", source);
   const std::optional<CameraModelId> id = CameraModelFromName(name);

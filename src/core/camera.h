@@ -6,8 +6,7 @@
 #include <vector>
 
 #include <Eigen/Core>
-
-#include "src/core/json.h"
+#include <nlohmann/json_fwd.hpp>
 
 namespace pano4d {
 
@@ -120,8 +119,8 @@ struct Camera {
 inline constexpr double kMinProjectDepth = 1e-9;
 
 // JSON form: {"model": "OPENCV", "width": W, "height": H, "params": [...]}.
-Json CameraToJson(const Camera& camera);
+nlohmann::json CameraToJson(const Camera& camera);
 // Parses and Check()s; errors name `source` and the field.
-Camera CameraFromJson(const Json& json, const std::string& source);
+Camera CameraFromJson(const nlohmann::json& json, const std::string& source);
 
 }  // namespace pano4d

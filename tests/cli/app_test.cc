@@ -12,6 +12,7 @@
 #include "src/core/camera.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
+#include "src/core/version.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d::cli {
@@ -44,7 +45,7 @@ int Lines(const std::string& s) {
 TEST(CliTest, VersionAndHelp) {
   const Result version = RunCli({"--version"});
   EXPECT_EQ(version.status, kExitOk);
-  EXPECT_EQ(version.out, "pano4d 0.1.0\n");
+  EXPECT_EQ(version.out, std::string("pano4d ") + kVersion + "\n");
   const Result help = RunCli({"--help"});
   EXPECT_EQ(help.status, kExitOk);
   for (const char* name :

@@ -9,6 +9,7 @@
 
 #include "src/core/camera_check.h"
 #include "src/core/error.h"
+#include "src/core/json.h"
 
 namespace pano4d {
 namespace {
