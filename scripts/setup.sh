@@ -9,6 +9,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 BUILD_DIR=${PANO4D_BUILD_DIR:-build}
 JOBS=${PANO4D_JOBS:-$(nproc)}
+# Paths relative to the checkout, so that fresh clones (as CI makes) share
+# ccache's cache wherever they are.
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
+export CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-true}
 PACKAGES=(
   build-essential cmake ninja-build pkg-config ccache git
   libeigen3-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev libcli11-dev
