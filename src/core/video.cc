@@ -1,6 +1,7 @@
 #include "src/core/video.h"
 
 #include <cmath>
+#include <cstdlib>
 
 #include <opencv2/videoio.hpp>
 
@@ -11,6 +12,23 @@ namespace pano4d {
 struct VideoReader::Capture {
   cv::VideoCapture capture;
 };
+
+namespace {
+
+// Files are opened with FFmpeg only. With CAP_ANY, OpenCV also tries
+// GStreamer and camera SDK backends on a file it cannot read, each printing
+// its own warnings (and leaking in libusb); pano4d reports the failure in
+// one line itself. For the same reason FFmpeg's log is quiet unless the user
+// sets OPENCV_FFMPEG_LOGLEVEL (e.g. 32 for info) to debug a codec problem.
+void QuietFfmpeg() {
+  static const bool quiet = [] {
+    return ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", /*overwrite=*/0) ==
+           0;  // AV_LOG_QUIET
+  }();
+  (void)quiet;
+}
+
+}  // namespace
 
 void VideoReadOptions::Check() const {
   if (stride < 1)
@@ -32,7 +50,8 @@ VideoReader::VideoReader(const std::filesystem::path& path,
   if (std::filesystem::is_directory(path, ec)) {
     throw Error::In(path.string(), "is a directory, expected a video file");
   }
-  if (!capture_->capture.open(path.string(), cv::CAP_ANY) ||
+  QuietFfmpeg();
+  if (!capture_->capture.open(path.string(), cv::CAP_FFMPEG) ||
       !capture_->capture.isOpened()) {
     throw Error::In(
         path.string(),

@@ -32,6 +32,7 @@ Result RunBinary(const std::string& args, const testing::TempDir& dir) {
 TEST(Pano4dBinaryTest, CorruptInputsFailWithOneLineAndNonZeroStatus) {
   testing::TempDir dir;
   testing::WriteTruncatedPng(dir / "cut.png");
+  testing::WriteText(dir / "fake.mp4", "these bytes are not a video");
   testing::WriteText(dir / "cam.json",
                      R"({"model": "PINHOLE", "width": 640, "height": 480,
                                            "params": [500, "500", 320, 240]})");
@@ -41,6 +42,7 @@ TEST(Pano4dBinaryTest, CorruptInputsFailWithOneLineAndNonZeroStatus) {
       {(dir / "cam.json").string(),
        ": field 'params[1]' = \"500\": expected a number"},
       {(dir / "gone.mp4").string(), ": does not exist"},
+      {(dir / "fake.mp4").string(), ": OpenCV cannot open it as a video"},
   };
   for (const auto& [path, problem] : cases) {
     const Result r = RunBinary("inspect '" + path + "'", dir);
