@@ -69,6 +69,8 @@ struct UnprojectResult {
   bool ok() const { return status == UnprojectStatus::kOk; }
 };
 
+// The accessors and projections below assume a camera that passed Check()
+// (readers such as CameraFromJson call it).
 struct Camera {
   CameraModelId model_id = CameraModelId::kPinhole;
   int width = 0;
