@@ -14,7 +14,8 @@ function(pano4d_add_test)
   target_link_libraries(${ARG_NAME} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${ARG_NAME} PRIVATE
     PANO4D_DATA_DIR="${PANO4D_DATA_DIR}"
-    PANO4D_BINARY_DIR="${CMAKE_BINARY_DIR}")
+    PANO4D_BINARY_DIR="${CMAKE_BINARY_DIR}"
+    PANO4D_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   # PRE_TEST discovery keeps the build from running every test binary.
   gtest_discover_tests(${ARG_NAME}
     DISCOVERY_MODE PRE_TEST
