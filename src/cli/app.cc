@@ -41,8 +41,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
     {"eval",
      "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
     {"synth", "Generate a synthetic dynamic scene with exact ground truth"},
-    {"dataset",
-     "Inspect a dataset (DyCheck iPhone, Nvidia, Kubric-4D, synthetic)"},
     {"run",
      "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
@@ -91,6 +89,7 @@ int Main(int argc, char** argv) {
   Action action;
   AddInspectCommand(app, &action);
   AddBenchCommand(app, &action);
+  AddDatasetCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command, &action);
 

@@ -121,9 +121,9 @@ int RunBenchCamera(const BenchCameraOptions& options) {
       for (const Eigen::Vector2d& pixel : pixels)
         sink += camera.Unproject(pixel).ray.x();
     });
-    // A volatile store keeps the compiler from dropping the timed calls.
-    static volatile double keep_results;
-    keep_results = sink;
+    // An empty asm that reads `sink` keeps the compiler from dropping the
+    // timed calls (what benchmark::DoNotOptimize does).
+    asm volatile("" : : "r,m"(sink) : "memory");
     const std::string model(camera.info().name);
     if (options.json) {
       std::cout << Json{{"model", model},

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "evaluation/dycheck_dataset.h"
 #include "src/core/camera.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
@@ -58,9 +59,8 @@ TEST(CliTest, VersionAndHelp) {
 }
 
 TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name :
-       {"sfm", "depth", "fit", "expand", "render", "export", "eval", "synth",
-        "dataset", "run", "demo", "make-pairs"}) {
+  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export",
+                           "eval", "synth", "run", "demo", "make-pairs"}) {
     const Result r = RunCli({name, "--workspace", "ws"});
     EXPECT_EQ(r.status, kExitNotBuilt) << name;
     EXPECT_EQ(Lines(r.err), 1) << r.err;
@@ -120,6 +120,28 @@ TEST(CliTest, CorruptInputsGiveOneLineNamingTheFile) {
     EXPECT_NE(r.err.find(problem), std::string::npos) << r.err;
     EXPECT_TRUE(r.out.empty());
   }
+}
+
+TEST(CliTest, DatasetInfoDescribesADyCheckScene) {
+  testing::TempDir dir;
+  DyCheckScene scene;
+  const PosedCamera camera{
+      Camera{CameraModelId::kPinhole, 64, 48, {50, 50, 32, 24}}, Rigid3d()};
+  for (int t = 0; t < 4; ++t) scene.train.push_back({0, t, camera});
+  scene.val.push_back({1, 0, camera});
+  WriteDyCheckMetadata(dir.path(), scene);
+  const Result r =
+      RunCli({"dataset", "info", dir.path().string(), "--factor", "1"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const Json info = Json::parse(r.out);
+  EXPECT_EQ(info["kind"], "dycheck");
+  EXPECT_EQ(info["train"]["frames"], 4);
+  EXPECT_EQ(info["val"]["frames_per_camera"]["1"], 1);
+  EXPECT_EQ(info["train"]["image_sizes"]["64x48"], 4);
+
+  const Result bad = RunCli({"dataset", "info", (dir / "nope").string()});
+  EXPECT_EQ(bad.status, kExitError);
+  EXPECT_EQ(Lines(bad.err), 1);
 }
 
 TEST(CliTest, BenchCameraReportsExactRoundTripsForEveryModel) {

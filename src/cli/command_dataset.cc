@@ -1,0 +1,49 @@
+// pano4d dataset info DIR: what a dataset holds, as JSON on stdout.
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "evaluation/dataset.h"
+#include "src/cli/app.h"
+#include "src/core/json.h"
+
+namespace pano4d::cli {
+namespace {
+
+struct DatasetInfoOptions {
+  std::string root;
+  int factor = 2;
+};
+
+int RunDatasetInfo(const DatasetInfoOptions& options) {
+  const Dataset dataset = LoadDataset(options.root, options.factor);
+  std::cout << DatasetInfo(dataset).dump(2) << "\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddDatasetCommand(CLI::App& app, Action* action) {
+  CLI::App* dataset = app.add_subcommand(
+      "dataset", "Inspect a dataset (DyCheck iPhone layout, pano4d synthetic)");
+  dataset->require_subcommand(1);
+  auto options = std::make_shared<DatasetInfoOptions>();
+  CLI::App* info = dataset->add_subcommand(
+      "info",
+      "Print as JSON: the kind of dataset, frame counts per split and camera, "
+      "image sizes, "
+      "and whether RGB, depth and covisible masks are present");
+  info->add_option("dir", options->root, "Dataset folder")->required();
+  info->add_option(
+          "--factor", options->factor,
+          "Resolution folder to describe (DyCheck: 1 for 1x, 2 for 2x)")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  info->callback([action, options] {
+    *action = [options] { return RunDatasetInfo(*options); };
+  });
+}
+
+}  // namespace pano4d::cli
