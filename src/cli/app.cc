@@ -40,7 +40,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
      "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
     {"eval",
      "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
-    {"synth", "Generate a synthetic dynamic scene with exact ground truth"},
     {"run",
      "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
@@ -90,6 +89,7 @@ int Main(int argc, char** argv) {
   AddInspectCommand(app, &action);
   AddBenchCommand(app, &action);
   AddDatasetCommand(app, &action);
+  AddSynthCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command, &action);
 

@@ -27,5 +27,6 @@ using Action = std::function<int()>;
 void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
+void AddSynthCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

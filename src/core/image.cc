@@ -81,6 +81,23 @@ std::string Lower(std::string s) {
   return s;
 }
 
+// The checked decode that every reader shares: non-empty, complete, and
+// decodable, as OpenCV's IMREAD_UNCHANGED returns it.
+cv::Mat DecodeRaw(const std::vector<std::uint8_t>& bytes,
+                  const std::string& source) {
+  EnableOpenExr();
+  if (bytes.empty())
+    throw Error::In(source, "is empty (0 bytes), expected an image");
+  CheckComplete(bytes, source);
+  cv::Mat raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  if (raw.empty()) {
+    throw Error::In(
+        source,
+        "cannot be decoded as an image (corrupt, or not a PNG/JPEG/EXR file)");
+  }
+  return raw;
+}
+
 }  // namespace
 
 Image::Image(int width, int height)
@@ -136,16 +153,7 @@ bool Image::AllFinite() const {
 
 Image DecodeImage(const std::vector<std::uint8_t>& bytes,
                   const std::string& source, cv::Mat* alpha) {
-  EnableOpenExr();
-  if (bytes.empty())
-    throw Error::In(source, "is empty (0 bytes), expected an image");
-  CheckComplete(bytes, source);
-  const cv::Mat raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  if (raw.empty()) {
-    throw Error::In(
-        source,
-        "cannot be decoded as an image (corrupt, or not a PNG/JPEG/EXR file)");
-  }
+  const cv::Mat raw = DecodeRaw(bytes, source);
   if (alpha) {
     *alpha = cv::Mat();
     if (raw.channels() == 4) {
@@ -196,6 +204,35 @@ std::vector<std::uint8_t> EncodeImage(const Image& image,
 void WriteImage(const std::filesystem::path& path, const Image& image) {
   const std::vector<std::uint8_t> bytes =
       EncodeImage(image, path.extension().string(), path.string());
+  WriteFileAtomically(
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()),
+                             bytes.size()));
+}
+
+cv::Mat ReadMask(const std::filesystem::path& path) {
+  const cv::Mat raw = DecodeRaw(ReadFileBytes(path), path.string());
+  cv::Mat channel = raw;
+  if (raw.channels() > 1) cv::extractChannel(raw, channel, 0);
+  cv::Mat out;
+  channel.convertTo(out, CV_8U,
+                    raw.depth() == CV_16U   ? 1.0 / 257
+                    : raw.depth() == CV_32F ? 255.0
+                                            : 1.0);
+  return out;
+}
+
+void WriteMask(const std::filesystem::path& path, const cv::Mat& mask) {
+  if (mask.type() != CV_8UC1) {
+    throw Error(path.string(), "type", std::to_string(mask.type()),
+                "a mask must be CV_8UC1");
+  }
+  if (path.extension() != ".png") {
+    throw Error(path.string(), "extension", path.extension().string(),
+                "masks are written as .png");
+  }
+  std::vector<std::uint8_t> bytes;
+  if (!cv::imencode(".png", mask, bytes))
+    throw Error::In(path.string(), "PNG encoding failed");
   WriteFileAtomically(
       path, std::string_view(reinterpret_cast<const char*>(bytes.data()),
                              bytes.size()));

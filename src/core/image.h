@@ -61,4 +61,11 @@ std::vector<std::uint8_t> EncodeImage(const Image& image,
 // Writes atomically (temporary name, then rename).
 void WriteImage(const std::filesystem::path& path, const Image& image);
 
+// Single-channel 8-bit images: masks (0 or 255, DESIGN.md) and label maps
+// (instance ids). ReadMask takes the first channel of whatever the file
+// holds, converted to 8 bits; WriteMask needs a CV_8UC1 matrix and writes a
+// lossless PNG atomically.
+cv::Mat ReadMask(const std::filesystem::path& path);
+void WriteMask(const std::filesystem::path& path, const cv::Mat& mask);
+
 }  // namespace pano4d
