@@ -3,6 +3,8 @@
 #include <map>
 
 #include "evaluation/dycheck_dataset.h"
+#include "evaluation/kubric_dataset.h"
+#include "evaluation/nvidia_dataset.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
 
@@ -64,10 +66,14 @@ Dataset LoadDataset(const fs::path& root, int factor) {
   if (!fs::is_directory(root))
     throw Error::In(root.string(), "is not a directory");
   if (LooksLikeDyCheck(root)) return ReadDyCheck(root, factor);
-  throw Error::In(
-      root.string(),
-      "not a dataset pano4d knows: expected the DyCheck iPhone layout "
-      "(dataset.json, splits/, camera/)");
+  if (LooksLikeNvidia(root)) return ReadNvidia(root, factor);
+  if (LooksLikeKubric4D(root)) return ReadKubric4D(root);
+  throw Error::In(root.string(),
+                  "not a dataset pano4d knows: expected the DyCheck iPhone "
+                  "layout (dataset.json, "
+                  "splits/, camera/), Nvidia Dynamic Scenes (poses_bounds.npy) "
+                  "or Kubric-4D "
+                  "(<scene>_p0_v<V>.json)");
 }
 
 }  // namespace pano4d
