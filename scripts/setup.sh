@@ -21,33 +21,8 @@ PACKAGES=(
   colmap
 )
 
-missing=()
-for package in "${PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
-    missing+=("$package")
-done
-
-if ((${#missing[@]})); then
-  SUDO=()
-  if [[ $EUID -ne 0 ]]; then
-    command -v sudo >/dev/null || {
-      echo "pano4d setup: need root (or sudo) to install: ${missing[*]}" >&2
-      exit 1
-    }
-    SUDO=(sudo)
-  fi
-  log=$(mktemp -t pano4d-apt.XXXXXX.log)
-  echo "pano4d setup: installing ${#missing[@]} Debian packages: ${missing[*]} (log: $log)"
-  start=$SECONDS
-  if ! { "${SUDO[@]}" apt-get update -qq &&
-         "${SUDO[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
-           --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
-    tail -n 30 "$log" >&2
-    echo "pano4d setup: apt-get failed; the full log is $log" >&2
-    exit 1
-  fi
-  echo "pano4d setup: packages installed in $((SECONDS - start)) s"
-fi
+source scripts/apt.sh
+apt_install "${PACKAGES[@]}"
 
 start=$SECONDS
 mkdir -p "$BUILD_DIR"

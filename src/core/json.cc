@@ -11,9 +11,10 @@ namespace pano4d {
 Json ParseJson(std::string_view text, const std::string& source) {
   try {
     return Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
-    // nlohmann's message starts with "[json.exception.parse_error.101] parse
-    // error at line L, column C: ..."; keep the part after the tag.
+  } catch (const Json::exception& e) {
+    // A syntax error is a parse_error, a number that does not fit a double
+    // (1e999) an out_of_range. The message starts with a tag such as
+    // "[json.exception.parse_error.101] "; keep the part after it.
     std::string message = e.what();
     const std::size_t tag_end = message.find("] ");
     if (tag_end != std::string::npos) message = message.substr(tag_end + 2);

@@ -27,6 +27,14 @@ TEST(JsonTest, SyntaxErrorNamesSourceAndPosition) {
       << message;
 }
 
+TEST(JsonTest, NumberOverflowIsAnErrorNamingTheSource) {
+  // nlohmann reports this as out_of_range, not parse_error (found by fuzzing).
+  const std::string message =
+      MessageOf([] { ParseJson("{\"f\": 1e999}", "cam.json"); });
+  EXPECT_EQ(message.rfind("cam.json: not valid JSON (number overflow", 0), 0u)
+      << message;
+}
+
 TEST(JsonTest, TypedFieldsAreStrict) {
   const Json j = ParseJson(
       R"({"w": 640, "f": 1.5, "s": "640", "b": true, "big": 1e12, "v": [1, 2.5], "bad": [1, "x"]})",

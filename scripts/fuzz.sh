@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Builds pano4d's libFuzzer targets with clang (AddressSanitizer and
+# UndefinedBehaviorSanitizer) in build-fuzz/ and runs each for SECONDS
+# (default 300). A crash, a sanitizer report, an allocation over 512 MB or an
+# input that takes over 10 s stops the run and leaves the input in
+# build-fuzz/ (crash-*, oom-*, timeout-*).
+#   scripts/fuzz.sh [SECONDS] [TARGET...]   targets: npy json (default: all)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+SECONDS_EACH=${1:-300}
+shift || true
+TARGETS=("$@")
+((${#TARGETS[@]})) || TARGETS=(npy json)
+
+bash scripts/setup.sh >/dev/null  # the Debian packages the project needs
+source scripts/apt.sh
+apt_install clang libclang-rt-14-dev
+
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_COMPILER=clang++ -DPANO4D_BUILD_TESTS=OFF -DPANO4D_BUILD_FUZZERS=ON \
+  -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined" \
+  >build-fuzz.configure.log 2>&1 || { tail -n 20 build-fuzz.configure.log; exit 1; }
+for target in "${TARGETS[@]}"; do
+  cmake --build build-fuzz --target "pano4d_${target}_fuzzer" >/dev/null
+done
+
+for target in "${TARGETS[@]}"; do
+  corpus=build-fuzz/corpus/$target
+  mkdir -p "$corpus"
+  cp -n tests/fuzz/seeds/"$target"/* "$corpus"/ 2>/dev/null || true
+  [[ $target == npy ]] && cp -n tests/data/npy/*.npy "$corpus"/
+  echo "pano4d fuzz: $target for $SECONDS_EACH s"
+  (cd build-fuzz && "./tests/fuzz/pano4d_${target}_fuzzer" "corpus/$target" \
+     -max_total_time="$SECONDS_EACH" -malloc_limit_mb=512 -rss_limit_mb=2048 -timeout=10 \
+     -print_final_stats=1 2>&1 | tail -n 12)
+done
