@@ -38,6 +38,12 @@ struct Dataset {
   // scene.json near/far are in its normalised units and divided by scale).
   std::optional<double> near;
   std::optional<double> far;
+  // DyCheck's normalisation (scene.json): normalised = (x - center) * scale;
+  // and its orientation hints (extra.json), in normalised units.
+  double scene_scale = 1.0;
+  Eigen::Vector3d scene_center = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> lookat;
+  std::optional<Eigen::Vector3d> up;
 };
 
 // What `pano4d dataset info` prints: kind, frame counts per split and camera,

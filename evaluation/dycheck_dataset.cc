@@ -71,6 +71,58 @@ std::vector<DatasetFrame> ReadSplit(const fs::path& root,
 
 Json Vector(const Eigen::Vector3d& v) { return Json{v.x(), v.y(), v.z()}; }
 
+Eigen::Vector3d ReadVector(const Json& json, const std::string& key,
+                           const std::string& source) {
+  const std::vector<double> v = GetJson<std::vector<double>>(json, key, source);
+  if (v.size() != 3)
+    throw Error(source, key, std::to_string(v.size()) + " values",
+                "expected 3");
+  return {v[0], v[1], v[2]};
+}
+
+// dataset.json and metadata.json repeat what the splits say; a scene where
+// they disagree was assembled wrongly, and which to trust is not ours to
+// guess.
+void CheckConsistency(const fs::path& root, const Dataset& dataset) {
+  const fs::path dataset_path = root / "dataset.json";
+  const Json index = ReadJson(dataset_path);
+  const std::vector<std::pair<const char*, const std::vector<DatasetFrame>*>>
+      splits = {{"train_ids", &dataset.train}, {"val_ids", &dataset.val}};
+  for (const auto& [key, frames] : splits) {
+    if (!index.contains(key)) continue;
+    const Json ids = GetJson<Json>(index, key, dataset_path.string());
+    if (!ids.is_array() || ids.size() != frames->size()) {
+      throw Error(dataset_path.string(), key,
+                  std::to_string(ids.is_array() ? ids.size() : 0) + " ids",
+                  "disagrees with splits/ (" + std::to_string(frames->size()) +
+                      " frames)");
+    }
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ids[i] != (*frames)[i].id) {
+        throw Error(dataset_path.string(),
+                    std::string(key) + "[" + std::to_string(i) + "]",
+                    JsonValueForMessage(ids[i]),
+                    "disagrees with splits/ ('" + (*frames)[i].id + "')");
+      }
+    }
+  }
+  const fs::path metadata_path = root / "metadata.json";
+  if (!fs::exists(metadata_path)) return;
+  const Json metadata = ReadJson(metadata_path);
+  for (const auto& [key, frames] : splits) {
+    for (const DatasetFrame& f : *frames) {
+      if (!metadata.contains(f.id)) continue;
+      const int camera = GetJson<int>(metadata[f.id], "camera_id",
+                                      metadata_path.string() + " " + f.id);
+      if (camera != f.camera_id) {
+        throw Error(
+            metadata_path.string(), f.id + ".camera_id", std::to_string(camera),
+            "disagrees with splits/ (" + std::to_string(f.camera_id) + ")");
+      }
+    }
+  }
+}
+
 Json SplitJson(const std::vector<DyCheckScene::Frame>& frames) {
   Json names = Json::array(), cameras = Json::array(), times = Json::array();
   for (const auto& f : frames) {
@@ -104,10 +156,15 @@ Dataset ReadDyCheck(const fs::path& root, int factor) {
     for (const DatasetFrame& f : *split)
       dataset.num_times = std::max(dataset.num_times, f.time_id + 1);
   }
-  const fs::path extra = root / "extra.json";
-  if (fs::exists(extra))
-    dataset.fps =
-        GetJsonOr<double>(ReadJson(extra), "fps", 0.0, extra.string());
+  const fs::path extra_path = root / "extra.json";
+  if (fs::exists(extra_path)) {
+    const Json extra = ReadJson(extra_path);
+    dataset.fps = GetJsonOr<double>(extra, "fps", 0.0, extra_path.string());
+    if (extra.contains("lookat"))
+      dataset.lookat = ReadVector(extra, "lookat", extra_path.string());
+    if (extra.contains("up"))
+      dataset.up = ReadVector(extra, "up", extra_path.string());
+  }
   const fs::path scene_path = root / "scene.json";
   if (fs::exists(scene_path)) {
     const Json scene = ReadJson(scene_path);
@@ -115,9 +172,12 @@ Dataset ReadDyCheck(const fs::path& root, int factor) {
     if (!(scale > 0))
       throw Error(scene_path.string(), "scale", std::to_string(scale),
                   "must be positive");
+    dataset.scene_scale = scale;
+    dataset.scene_center = ReadVector(scene, "center", scene_path.string());
     dataset.near = GetJson<double>(scene, "near", scene_path.string()) / scale;
     dataset.far = GetJson<double>(scene, "far", scene_path.string()) / scale;
   }
+  CheckConsistency(root, dataset);
   return dataset;
 }
 

@@ -52,6 +52,9 @@ TEST(DyCheckDatasetTest, WrittenSceneReadsBackWithTheSameCameras) {
   EXPECT_DOUBLE_EQ(full.fps, 24);
   EXPECT_NEAR(*full.near, 0.5, 1e-12);
   EXPECT_NEAR(*full.far, 12.0, 1e-12);
+  EXPECT_DOUBLE_EQ(full.scene_scale, 0.25);
+  EXPECT_LT((full.scene_center - Eigen::Vector3d(0.1, 0.2, 0.3)).norm(), 1e-15);
+  ASSERT_TRUE(full.up.has_value());
   for (std::size_t i = 0; i < scene.train.size(); ++i) {
     const PosedCamera& a = scene.train[i].camera;
     const PosedCamera& b = full.train[i].camera;
@@ -98,6 +101,23 @@ TEST(DyCheckDatasetTest, MissingCameraAndBadSplitsNameTheFile) {
       Json{{"frame_names", {"../x"}}, {"camera_ids", {0}}, {"time_ids", {0}}});
   EXPECT_THROW(LoadDataset(dir.path(), 1), Error);
   EXPECT_THROW(LoadDataset(dir.path(), 3), Error);
+
+  // dataset.json and metadata.json must agree with the splits.
+  WriteDyCheckMetadata(dir.path(), RandomScene(3, 1));
+  Json index = ReadJson(dir / "dataset.json");
+  index["train_ids"][1] = "0_00007";
+  WriteJson(dir / "dataset.json", index);
+  try {
+    LoadDataset(dir.path(), 1);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "train_ids[1]");
+  }
+  WriteDyCheckMetadata(dir.path(), RandomScene(3, 1));
+  Json metadata = ReadJson(dir / "metadata.json");
+  metadata["1_00000"]["camera_id"] = 2;
+  WriteJson(dir / "metadata.json", metadata);
+  EXPECT_THROW(LoadDataset(dir.path(), 1), Error);
   EXPECT_THROW(LoadDataset(dir / "nowhere", 2), Error);
 }
 
