@@ -1,8 +1,12 @@
 #include "evaluation/synth_generate.h"
 
+#include <cstring>
+
 #include <gtest/gtest.h>
 
 #include "evaluation/dataset.h"
+#include "evaluation/synth_cameras.h"
+#include "evaluation/synth_render.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
@@ -61,6 +65,35 @@ TEST(SynthGenerateTest, TinySceneIsACompleteDyCheckDataset) {
         cv::countNonZero(ReadMask(dir / "dynamic" / "2x" / (f.id + ".png")));
   }
   EXPECT_GT(dynamic, 0);
+}
+
+TEST(SynthGenerateTest, FilesReadBackAsTheCamerasAndImagesThatWereRendered) {
+  testing::TempDir dir;
+  GenerateSynthScene({"tiny", 0, false}, dir.path());
+  const Dataset dataset = LoadDataset(dir.path(), 1);
+  const Scene scene = BuildScene(0, false);
+  const Camera intrinsics{
+      CameraModelId::kPinhole, 128, 96, {115.2, 115.2, 64, 48}};
+  const std::vector<PosedCamera> cameras =
+      TrainingTrajectory(scene, intrinsics, 8, 0);
+  for (int t : {0, 5}) {
+    const PosedCamera& loaded = dataset.train[t].camera;
+    EXPECT_LT((loaded.cam_from_world.ToMatrix() -
+               cameras[t].cam_from_world.ToMatrix())
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-9);
+    EXPECT_EQ(loaded.camera.params, cameras[t].camera.params);
+    const RenderedFrame rendered =
+        RenderFrame(scene, cameras[t], t / 7.0, true, false);
+    const Image read = ReadImage(dataset.train[t].rgb);
+    EXPECT_LE(cv::norm(read.mat(), rendered.rgb.mat(), cv::NORM_INF),
+              0.5 / 255 + 1e-6);
+    const NpyArray depth = ReadNpy(dataset.train[t].depth);
+    EXPECT_EQ(
+        std::memcmp(depth.data.data(), rendered.depth.data, depth.data.size()),
+        0);
+  }
 }
 
 TEST(SynthGenerateTest, SameSeedSameBytesOtherSeedOtherScene) {
