@@ -190,7 +190,6 @@ std::string DyCheckFrameId(int camera_id, int time_id) {
 void WriteDyCheckMetadata(const fs::path& root, const DyCheckScene& scene) {
   Json ids = Json::array(), train_ids = Json::array(), val_ids = Json::array();
   Json metadata = Json::object();
-  int appearance = 0;
   for (const auto* split : {&scene.train, &scene.val}) {
     for (const auto& f : *split) {
       const std::string id = DyCheckFrameId(f.camera_id, f.time_id);
@@ -200,7 +199,6 @@ void WriteDyCheckMetadata(const fs::path& root, const DyCheckScene& scene) {
       metadata[id] = Json{{"warp_id", f.time_id},
                           {"appearance_id", f.time_id},
                           {"camera_id", f.camera_id}};
-      ++appearance;
     }
   }
   WriteJson(root / "splits" / "train.json", SplitJson(scene.train), 4);

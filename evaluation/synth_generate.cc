@@ -163,7 +163,8 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
           WriteFrame(scene, camera, s, id, out, true, nullptr,
                      &summary.render_seconds, &summary.write_seconds);
       Timer covisibility_timer;
-      const cv::Mat counts = CovisibleCounts(half, views);
+      const cv::Mat counts =
+          CovisibleCounts(half, views, summary.covisibility_threshold + 1);
       const cv::Mat mask = CovisibleMask(counts, train_frames);
       const cv::Mat surface = half.depth > 0;
       summary.val_pixels += cv::countNonZero(surface);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "src/core/error.h"
+
 namespace pano4d::synth {
 
 RenderedFrame RenderFrame(const Scene& scene, const PosedCamera& camera,
@@ -60,9 +62,41 @@ int CovisibilityThreshold(int num_training_views) {
 }
 
 cv::Mat CovisibleCounts(const RenderedFrame& val,
-                        const std::vector<TrainingView>& train) {
+                        const std::vector<TrainingView>& train, int stop_at) {
   const int height = val.depth.rows;
   const int width = val.depth.cols;
+  const std::size_t num_parts =
+      train.empty() ? 0 : train[0].poses.world_from_part.size();
+  // Per view: every part's pose composed into the camera (camera_from_part)
+  // as a matrix, and the pinhole intrinsics, so that one check is a 3x3
+  // product and a division.
+  struct View {
+    std::vector<Eigen::Matrix3d> rotation;
+    std::vector<Eigen::Vector3d> translation;
+    double fx, fy, cx, cy;
+    const cv::Mat* depth;
+  };
+  std::vector<View> views;
+  views.reserve(train.size());
+  for (const TrainingView& t : train) {
+    const Camera& c = t.camera.camera;
+    if (c.HasDistortion()) {
+      throw Error("covisibility", "camera model", std::string(c.info().name),
+                  "synthetic training cameras are pinhole");
+    }
+    View v{
+        {},      {}, c.focal_x(), c.focal_y(), c.principal_x(), c.principal_y(),
+        &t.depth};
+    for (std::size_t p = 0; p < num_parts; ++p) {
+      const Rigid3d camera_from_part =
+          t.camera.cam_from_world * t.poses.world_from_part[p];
+      v.rotation.push_back(camera_from_part.rotation.toRotationMatrix());
+      v.translation.push_back(camera_from_part.translation);
+    }
+    views.push_back(std::move(v));
+  }
+  const int limit = stop_at > 0 ? stop_at : static_cast<int>(views.size());
+
   cv::Mat counts(height, width, CV_32SC1, cv::Scalar(0));
 #pragma omp parallel for schedule(dynamic, 4)
   for (int y = 0; y < height; ++y) {
@@ -71,19 +105,18 @@ cv::Mat CovisibleCounts(const RenderedFrame& val,
       const int part = val.part[i];
       if (part < 0) continue;
       int seen = 0;
-      for (const TrainingView& view : train) {
-        // The same surface point at the training view's time.
-        const Eigen::Vector3d world =
-            view.poses.world_from_part[part] * val.local[i];
-        const Eigen::Vector3d cam = view.camera.cam_from_world * world;
-        const std::optional<Eigen::Vector2d> pixel =
-            view.camera.camera.Project(cam);
-        if (!pixel) continue;
-        const int u = static_cast<int>(std::floor(pixel->x()));
-        const int v = static_cast<int>(std::floor(pixel->y()));
-        if (u < 0 || v < 0 || u >= view.depth.cols || v >= view.depth.rows)
+      for (std::size_t k = 0; k < views.size() && seen < limit; ++k) {
+        // The same surface point at the training view's time, in its camera.
+        const View& view = views[k];
+        const Eigen::Vector3d cam =
+            view.rotation[part] * val.local[i] + view.translation[part];
+        if (!(cam.z() > kMinProjectDepth)) continue;
+        const double u = view.fx * cam.x() / cam.z() + view.cx;
+        const double v = view.fy * cam.y() / cam.z() + view.cy;
+        if (!(u >= 0 && v >= 0 && u < view.depth->cols && v < view.depth->rows))
           continue;
-        const double map = view.depth.at<float>(v, u);
+        const double map =
+            view.depth->at<float>(static_cast<int>(v), static_cast<int>(u));
         if (map > 0 && cam.z() <= map * (1 + kCovisibleRelativeDepth) +
                                       kCovisibleAbsoluteDepth) {
           ++seen;

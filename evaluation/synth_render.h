@@ -50,8 +50,12 @@ inline constexpr double kCovisibleAbsoluteDepth = 0.005;  // metres
 
 // Visible-view counts per pixel (CV_32SC1) of a validation frame rendered
 // with keep_surface, and the covisible mask (CV_8UC1, 255 = covisible).
+// Counting stops at `stop_at` views (the mask only needs to know whether a
+// count exceeds the threshold); 0 counts every view. Training cameras must
+// be pinhole, as the synthetic ones are.
 cv::Mat CovisibleCounts(const RenderedFrame& val,
-                        const std::vector<TrainingView>& train);
+                        const std::vector<TrainingView>& train,
+                        int stop_at = 0);
 cv::Mat CovisibleMask(const cv::Mat& counts, int num_training_views);
 
 }  // namespace pano4d::synth
