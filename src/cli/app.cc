@@ -46,22 +46,22 @@ const std::vector<PlannedCommand> kPlannedCommands = {
     {"make-pairs", "Panoramic-trajectory training pairs for a video prior"},
 };
 
-void AddPlannedCommand(CLI::App& app, const PlannedCommand& command,
-                       Action* action) {
-  CLI::App* sub = app.add_subcommand(command.name, command.description);
+}  // namespace
+
+void AddPlannedCommand(CLI::App& parent, const std::string& path,
+                       const std::string& description, Action* action) {
+  CLI::App* sub =
+      parent.add_subcommand(path.substr(path.rfind(' ') + 1), description);
   sub->allow_extras();
   sub->footer("Not built yet in this version of pano4d.");
-  const std::string name = command.name;
-  sub->callback([action, name] {
-    *action = [name] {
-      std::cerr << "pano4d " << name << ": not built yet in pano4d " << kVersion
-                << " (see README.md, \"Subcommands\")\n";
+  sub->callback([action, path] {
+    *action = [path] {
+      std::cerr << "pano4d " << path << ": not built yet in pano4d " << kVersion
+                << " (see README.md, \"Status\")\n";
       return kExitNotBuilt;
     };
   });
 }
-
-}  // namespace
 
 int Main(int argc, char** argv) {
   CLI::App app{
@@ -91,7 +91,7 @@ int Main(int argc, char** argv) {
   AddDatasetCommand(app, &action);
   AddSynthCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
-    AddPlannedCommand(app, command, &action);
+    AddPlannedCommand(app, command.name, command.description, &action);
 
   try {
     app.parse(argc, argv);

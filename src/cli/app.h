@@ -1,6 +1,7 @@
 #pragma once
 
 #include <functional>
+#include <string>
 
 namespace CLI {
 class App;
@@ -23,6 +24,12 @@ int Main(int argc, char** argv);
 // A subcommand's parsed options live in its callback; the callback stores
 // the function to run here, and Main runs it after parsing succeeds.
 using Action = std::function<int()>;
+
+// A subcommand of `parent` that the plan has but this build does not: it
+// accepts any flags, and running it prints one line and exits with
+// kExitNotBuilt. `path` names it in that line ("sfm", "bench render").
+void AddPlannedCommand(CLI::App& parent, const std::string& path,
+                       const std::string& description, Action* action);
 
 void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);

@@ -146,21 +146,6 @@ int RunBenchCamera(const BenchCameraOptions& options) {
   return kExitOk;
 }
 
-void AddPlannedBench(CLI::App& bench, const char* name, const char* description,
-                     Action* action) {
-  CLI::App* sub = bench.add_subcommand(name, description);
-  sub->allow_extras();
-  sub->footer("Not built yet in this version of pano4d.");
-  const std::string label = name;
-  sub->callback([action, label] {
-    *action = [label] {
-      std::cerr << "pano4d bench " << label << ": not built yet in pano4d "
-                << kVersion << "\n";
-      return kExitNotBuilt;
-    };
-  });
-}
-
 }  // namespace
 
 void AddBenchCommand(CLI::App& app, Action* action) {
@@ -189,13 +174,14 @@ void AddBenchCommand(CLI::App& app, Action* action) {
     *action = [options] { return RunBenchCamera(*options); };
   });
 
-  AddPlannedBench(*bench, "render", "Rasterizer forward and backward speed",
-                  action);
-  AddPlannedBench(*bench, "stability",
-                  "Stiff and extreme cases: count of non-finite values",
-                  action);
-  AddPlannedBench(*bench, "budget",
-                  "PSNR/mPSNR/uPSNR against wall time across budgets", action);
+  AddPlannedCommand(*bench, "bench render",
+                    "Rasterizer forward and backward speed", action);
+  AddPlannedCommand(*bench, "bench stability",
+                    "Stiff and extreme cases: count of non-finite values",
+                    action);
+  AddPlannedCommand(*bench, "bench budget",
+                    "PSNR/mPSNR/uPSNR against wall time across budgets",
+                    action);
 }
 
 }  // namespace pano4d::cli

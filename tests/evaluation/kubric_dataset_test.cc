@@ -1,7 +1,7 @@
 #include "evaluation/kubric_dataset.h"
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "src/core/error.h"
 #include "src/core/json.h"
@@ -14,7 +14,8 @@ namespace {
 // Blender camera axes (x right, y up, z back), quaternion w, x, y, z.
 Json KubricView(const Eigen::Vector3d& eye, int frames) {
   const Eigen::Vector3d forward = (-eye).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d right =
+      forward.cross(Eigen::Vector3d::UnitZ()).normalized();
   const Eigen::Vector3d up = right.cross(forward);
   Eigen::Matrix3d world_from_blender;
   world_from_blender << right, up, -forward;
@@ -35,8 +36,10 @@ TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
   testing::TempDir dir;
   std::vector<Eigen::Vector3d> eyes;
   for (int v = 0; v < 6; ++v) {
-    eyes.emplace_back(15 * std::cos(0.5 * v), 15 * std::sin(0.5 * v), v < 4 ? 10.0 : 1.3);
-    WriteJson(dir / ("scn02900_p0_v" + std::to_string(v) + ".json"), KubricView(eyes.back(), 3));
+    eyes.emplace_back(15 * std::cos(0.5 * v), 15 * std::sin(0.5 * v),
+                      v < 4 ? 10.0 : 1.3);
+    WriteJson(dir / ("scn02900_p0_v" + std::to_string(v) + ".json"),
+              KubricView(eyes.back(), 3));
   }
   ASSERT_TRUE(LooksLikeKubric4D(dir.path()));
   const Dataset d = LoadDataset(dir.path(), 1);
@@ -49,8 +52,12 @@ TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
       EXPECT_DOUBLE_EQ(f.camera.camera.focal_x(), 576.0);
       EXPECT_DOUBLE_EQ(f.camera.camera.focal_y(), 576.0);
       EXPECT_LT((f.camera.Center() - eyes[f.camera_id]).norm(), 1e-9);
-      EXPECT_LT((*f.camera.Project(Eigen::Vector3d::Zero()) - Eigen::Vector2d(288, 192)).norm(), 1e-6);
-      EXPECT_LT(f.camera.Project(Eigen::Vector3d(0, 0, 1))->y(), 192);  // up is up
+      EXPECT_LT((*f.camera.Project(Eigen::Vector3d::Zero()) -
+                 Eigen::Vector2d(288, 192))
+                    .norm(),
+                1e-6);
+      EXPECT_LT(f.camera.Project(Eigen::Vector3d(0, 0, 1))->y(),
+                192);  // up is up
     }
   }
   EXPECT_EQ(d.train[2].id, "v4_t00002");

@@ -14,7 +14,8 @@ namespace {
 // origin, z up.
 Eigen::Matrix3d WorldFromCam(const Eigen::Vector3d& eye) {
   const Eigen::Vector3d forward = (-eye).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d right =
+      forward.cross(Eigen::Vector3d::UnitZ()).normalized();
   Eigen::Matrix3d m;
   m << right, forward.cross(right), forward;
   return m;
@@ -22,11 +23,13 @@ Eigen::Matrix3d WorldFromCam(const Eigen::Vector3d& eye) {
 
 // Writes poses_bounds.npy in LLFF's [down, right, backwards] column order,
 // the way NSFF's save_poses_nerf.py does.
-std::vector<Eigen::Vector3d> WriteScene(const std::filesystem::path& dense, int n) {
+std::vector<Eigen::Vector3d> WriteScene(const std::filesystem::path& dense,
+                                        int n) {
   std::vector<double> values;
   std::vector<Eigen::Vector3d> eyes;
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d eye(3 * std::cos(0.1 * i), -3 + 0.2 * i, 1.0 + 0.05 * i);
+    const Eigen::Vector3d eye(3 * std::cos(0.1 * i), -3 + 0.2 * i,
+                              1.0 + 0.05 * i);
     eyes.push_back(eye);
     const Eigen::Matrix3d r = WorldFromCam(eye);
     for (int row = 0; row < 3; ++row) {
@@ -65,7 +68,10 @@ TEST(NvidiaDatasetTest, LlffPosesBecomeOpenCvCamerasAndTheMonocularProtocol) {
     EXPECT_DOUBLE_EQ(f.camera.camera.focal_x(), 400.0);  // 800 at 960 px wide
     EXPECT_LT((f.camera.Center() - eyes[i]).norm(), 1e-12);
     // Every camera looks at the origin: it lands on the principal point.
-    EXPECT_LT((*f.camera.Project(Eigen::Vector3d::Zero()) - Eigen::Vector2d(240, 135)).norm(), 1e-9);
+    EXPECT_LT(
+        (*f.camera.Project(Eigen::Vector3d::Zero()) - Eigen::Vector2d(240, 135))
+            .norm(),
+        1e-9);
     // A point above the origin appears above it (OpenCV y down).
     EXPECT_LT(f.camera.Project(Eigen::Vector3d(0, 0, 0.5))->y(), 135);
     // View 0 tests at every time.
@@ -87,10 +93,12 @@ TEST(NvidiaDatasetTest, WithoutImagesSizesComeFromHwf) {
 
 TEST(NvidiaDatasetTest, RejectsMalformedPoses) {
   testing::TempDir dir;
-  WriteNpy(dir / "poses_bounds.npy", NpyArray::FromDoubles({2, 16}, std::vector<double>(32, 1.0)));
+  WriteNpy(dir / "poses_bounds.npy",
+           NpyArray::FromDoubles({2, 16}, std::vector<double>(32, 1.0)));
   EXPECT_THROW(LoadDataset(dir.path(), 1), Error);
   std::vector<double> not_rotation(34, 0.5);
-  WriteNpy(dir / "poses_bounds.npy", NpyArray::FromDoubles({2, 17}, not_rotation));
+  WriteNpy(dir / "poses_bounds.npy",
+           NpyArray::FromDoubles({2, 17}, not_rotation));
   try {
     LoadDataset(dir.path(), 1);
     FAIL();
@@ -98,7 +106,8 @@ TEST(NvidiaDatasetTest, RejectsMalformedPoses) {
     EXPECT_EQ(e.field(), "row 0");
   }
   WriteScene(dir.path(), 4);
-  WriteImage(dir / "images" / "000.png", Image(960, 540));  // 1 image for 4 poses
+  WriteImage(dir / "images" / "000.png",
+             Image(960, 540));  // 1 image for 4 poses
   EXPECT_THROW(LoadDataset(dir.path(), 1), Error);
 }
 
