@@ -38,8 +38,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
      "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
     {"export",
      "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
-    {"eval",
-     "DyCheck metrics (PSNR, SSIM, LPIPS, masked m* and u*) of renders"},
     {"run",
      "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
@@ -90,6 +88,7 @@ int Main(int argc, char** argv) {
   AddBenchCommand(app, &action);
   AddDatasetCommand(app, &action);
   AddSynthCommand(app, &action);
+  AddEvalCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

@@ -35,5 +35,6 @@ void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
+void AddEvalCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

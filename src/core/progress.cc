@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <sstream>
 
 #include "src/core/log.h"
@@ -48,7 +49,16 @@ ProgressBar::ProgressBar(std::string label, std::int64_t total,
   if (mode_ == Mode::kLive) Draw(false);
 }
 
-ProgressBar::~ProgressBar() { Finish(); }
+ProgressBar::~ProgressBar() {
+  // Unwinding from an error: a final "done" line would mislead, and the
+  // error message follows anyway.
+  if (std::uncaught_exceptions() > 0) {
+    finished_ = true;
+    if (mode_ == Mode::kLive) internal::WriteConsole(out_, "\n", false);
+    return;
+  }
+  Finish();
+}
 
 double ProgressBar::ElapsedSeconds() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() -

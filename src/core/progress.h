@@ -29,6 +29,7 @@ class ProgressBar {
   // Free text shown at the end of the line, e.g. the current loss.
   void SetStatus(std::string status);
   // Prints the final line (elapsed time, mean rate); later calls do nothing.
+  // The destructor calls it, except while an exception unwinds.
   void Finish();
 
   std::int64_t done() const { return done_; }

@@ -70,6 +70,18 @@ TEST(ProgressTest, LiveModeRedrawsInPlaceAndLogClearsTheLine) {
   EXPECT_EQ(CountLines(text), 2);  // the log line and the final bar line
 }
 
+TEST(ProgressTest, NoFinalLineWhenAnErrorUnwinds) {
+  std::ostringstream out;
+  try {
+    ProgressBar bar("fit", 100, out);
+    bar.Add(50);
+    throw std::runtime_error("disk full");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(out.str().find(" in 00:"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find(" 50%"), std::string::npos);
+}
+
 TEST(ProgressTest, OffModeIsSilent) {
   std::ostringstream out;
   {

@@ -1,0 +1,285 @@
+#include "evaluation/evaluate.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "evaluation/metrics.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/progress.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+enum Key {
+  kPsnr,
+  kSsim,
+  kLpips,
+  kMpsnr,
+  kMssim,
+  kMlpips,
+  kUpsnr,
+  kUssim,
+  kUlpips,
+  kMssimStrict,
+  kUssimStrict
+};
+
+fs::path RenderPath(const fs::path& renders, const std::string& id) {
+  for (const char* ext : {".png", ".jpg", ".jpeg", ".exr"}) {
+    const fs::path p = renders / (id + ext);
+    if (fs::exists(p)) return p;
+  }
+  return {};
+}
+
+std::string Size(const Image& image) {
+  return std::to_string(image.width()) + "x" + std::to_string(image.height());
+}
+
+// Metric values as JSON: null when unavailable or not finite (PSNR of
+// identical images is +inf, which JSON cannot hold; the notes say so).
+Json Value(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
+}
+
+std::string Cell(const std::optional<double>& v, const char* format) {
+  if (!v) return "n/a";
+  if (!std::isfinite(*v)) return *v > 0 ? "inf" : "-inf";
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), format, *v);
+  return buffer;
+}
+
+const char* FormatOf(std::size_t key) {
+  const std::string name = kMetricKeys[key];
+  return name.find("psnr") != std::string::npos ? "%.2f" : "%.3f";
+}
+
+std::string BenchmarkFile(const std::string& kind) {
+  if (kind == "dycheck") return "dycheck_iphone.json";
+  if (kind == "nvidia") return "nvidia_dynamic_scenes.json";
+  if (kind == "kubric4d") return "kubric4d.json";
+  return "";
+}
+
+}  // namespace
+
+EvaluationResult EvaluateRenders(const Dataset& dataset,
+                                 const fs::path& renders,
+                                 const EvaluateOptions& options) {
+  if (options.split != "val" && options.split != "train") {
+    throw Error("--split", "", options.split, "use val or train");
+  }
+  if (!options.lpips_weights.empty()) {
+    throw Error("--lpips-weights", "", options.lpips_weights.string(),
+                "LPIPS is not built yet in this version of pano4d; run without "
+                "this flag (the "
+                "LPIPS columns then read n/a)");
+  }
+  const std::vector<DatasetFrame>& frames =
+      options.split == "val" ? dataset.val : dataset.train;
+  if (frames.empty()) {
+    throw Error(dataset.root.string(), "split", options.split,
+                "has no frames to evaluate");
+  }
+  if (!fs::is_directory(renders))
+    throw Error::In(renders.string(), "is not a directory of renders");
+
+  // Every render must be there before any scoring: a mean over the frames
+  // that happen to exist would not be comparable with anyone's numbers.
+  std::vector<fs::path> render_paths;
+  int missing = 0;
+  std::string first_missing;
+  for (const DatasetFrame& f : frames) {
+    render_paths.push_back(RenderPath(renders, f.id));
+    if (render_paths.back().empty() && missing++ == 0) first_missing = f.id;
+  }
+  if (missing > 0) {
+    throw Error::In(renders.string(),
+                    std::to_string(missing) + " of " +
+                        std::to_string(frames.size()) +
+                        " renders are missing (first: " + first_missing +
+                        ".png); render every " + options.split + " frame");
+  }
+
+  EvaluationResult result;
+  result.dataset = dataset.root.string();
+  result.kind = std::string(ToString(dataset.kind));
+  result.split = options.split;
+  result.factor = dataset.factor;
+  ProgressBar progress("eval " + options.split,
+                       static_cast<std::int64_t>(frames.size()));
+  int with_mask = 0, empty_covisible = 0, empty_unseen = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const DatasetFrame& f = frames[i];
+    const Image truth = ReadImage(f.rgb);
+    const Image render = ReadImage(render_paths[i]);
+    if (render.width() != truth.width() || render.height() != truth.height()) {
+      throw Error(render_paths[i].string(), "size", Size(render),
+                  "expected " + Size(truth) + " like " + f.rgb.string());
+    }
+    const cv::Mat a = QuantizeForMetrics(render, render_paths[i].string());
+    const cv::Mat b = QuantizeForMetrics(truth, f.rgb.string());
+    FrameMetrics m;
+    m.id = f.id;
+    m.camera_id = f.camera_id;
+    m.time_id = f.time_id;
+    m.values[kPsnr] = Psnr(a, b);
+    m.values[kSsim] = Ssim(a, b)->dycheck;
+    if (!f.covisible.empty()) {
+      ++with_mask;
+      const cv::Mat raw = ReadMask(f.covisible);
+      if (raw.size() != truth.mat().size()) {
+        throw Error(f.covisible.string(), "size",
+                    std::to_string(raw.cols) + "x" + std::to_string(raw.rows),
+                    "expected " + Size(truth) + " like " + f.rgb.string());
+      }
+      const cv::Mat covisible = MetricMask(raw, f.covisible.string());
+      const cv::Mat unseen = InvertMask(covisible);
+      m.covisible_fraction = cv::mean(covisible)[0];
+      m.values[kMpsnr] = Psnr(a, b, covisible);
+      m.values[kUpsnr] = Psnr(a, b, unseen);
+      if (const auto s = Ssim(a, b, covisible)) {
+        m.values[kMssim] = s->dycheck;
+        m.values[kMssimStrict] = s->strict;
+      } else {
+        ++empty_covisible;
+      }
+      if (const auto s = Ssim(a, b, unseen)) {
+        m.values[kUssim] = s->dycheck;
+        m.values[kUssimStrict] = s->strict;
+      } else {
+        ++empty_unseen;
+      }
+    }
+    result.frames.push_back(m);
+    progress.Add();
+  }
+  progress.Finish();
+
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    double sum = 0;
+    int n = 0;
+    for (const FrameMetrics& m : result.frames) {
+      if (m.values[k]) {
+        sum += *m.values[k];
+        ++n;
+      }
+    }
+    result.frames_used[k] = n;
+    if (n > 0) result.mean[k] = sum / n;
+  }
+
+  result.notes.push_back(
+      "LPIPS: n/a, no AlexNet LPIPS weights were given (--lpips-weights; not "
+      "built yet in this "
+      "version)");
+  result.notes.push_back(
+      "SSIM columns are DyCheck's masked SSIM, in which windows wholly outside "
+      "the mask count as "
+      "1.0; mssim_strict and ussim_strict average only windows that touch the "
+      "mask");
+  if (with_mask == 0) {
+    result.notes.push_back(
+        "m* and u*: n/a, the dataset has no covisible masks for this split");
+  } else if (with_mask < static_cast<int>(frames.size())) {
+    result.notes.push_back("m* and u* are over the " +
+                           std::to_string(with_mask) +
+                           " frames that have a covisible mask");
+  }
+  if (empty_covisible > 0 || empty_unseen > 0) {
+    result.notes.push_back(
+        std::to_string(empty_unseen) + " frames have no unseen pixel and " +
+        std::to_string(empty_covisible) +
+        " no covisible pixel; they are left out of u* and m* respectively");
+  }
+  for (const FrameMetrics& m : result.frames) {
+    if (m.values[kPsnr] && std::isinf(*m.values[kPsnr])) {
+      result.notes.push_back(
+          "some frames are identical to the ground truth (PSNR +inf); JSON "
+          "holds null for infinite values");
+      break;
+    }
+  }
+  return result;
+}
+
+Json EvaluationJson(const EvaluationResult& r) {
+  Json mean = Json::object(), used = Json::object();
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    mean[kMetricKeys[k]] = Value(r.mean[k]);
+    used[kMetricKeys[k]] = r.frames_used[k];
+  }
+  return Json{{"dataset", r.dataset},      {"kind", r.kind},
+              {"split", r.split},          {"factor", r.factor},
+              {"frames", r.frames.size()}, {"mean", mean},
+              {"frames_used", used},       {"notes", r.notes}};
+}
+
+std::string EvaluationCsv(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "id,camera_id,time_id,covisible_fraction";
+  for (const char* key : kMetricKeys) out << "," << key;
+  out << "\n";
+  for (const FrameMetrics& m : r.frames) {
+    out << m.id << "," << m.camera_id << "," << m.time_id << ",";
+    if (m.covisible_fraction >= 0) out << Cell(m.covisible_fraction, "%.6f");
+    for (const auto& v : m.values) out << "," << (v ? Cell(v, "%.6f") : "");
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string EvaluationMarkdown(const EvaluationResult& r, const Json& paper) {
+  std::ostringstream out;
+  out << "# pano4d evaluation: " << r.kind << ", split " << r.split << ", "
+      << r.frames.size() << " frames at " << r.factor << "x\n\n";
+  out << "| Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | mLPIPS | uPSNR | "
+         "uSSIM | uLPIPS |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|\n";
+  out << "| pano4d |";
+  for (std::size_t k = 0; k < 9; ++k)
+    out << " " << Cell(r.mean[k], FormatOf(k)) << " |";
+  out << "\n";
+  if (paper.is_object() && paper.contains("rows")) {
+    for (const Json& row : paper["rows"]) {
+      out << "| " << row.value("method", "?") << " (paper) |";
+      for (std::size_t k = 0; k < 9; ++k) {
+        const char* key = kMetricKeys[k];
+        std::optional<double> v;
+        if (row.contains(key) && row[key].is_number())
+          v = row[key].get<double>();
+        out << " " << (v ? Cell(v, FormatOf(k)) : std::string("-")) << " |";
+      }
+      out << "\n";
+    }
+  }
+  out << "\nStrict masked SSIM (only windows that touch the mask): mSSIM "
+      << Cell(r.mean[kMssimStrict], "%.3f") << ", uSSIM "
+      << Cell(r.mean[kUssimStrict], "%.3f") << "\n\n";
+  for (const std::string& note : r.notes) out << "- " << note << "\n";
+  if (!paper.is_object())
+    out << "- the paper's rows are unavailable (no datasets_meta file)\n";
+  return out.str();
+}
+
+std::string WriteEvaluation(const EvaluationResult& r, const fs::path& out,
+                            const fs::path& datasets_meta) {
+  Json paper;
+  const std::string file = BenchmarkFile(r.kind);
+  if (!file.empty() && fs::exists(datasets_meta / file)) {
+    paper = ReadJson(datasets_meta / file).value("paper", Json());
+  }
+  WriteFileAtomically(out / "per_frame.csv", EvaluationCsv(r));
+  WriteJson(out / "metrics.json", EvaluationJson(r));
+  const std::string markdown = EvaluationMarkdown(r, paper);
+  WriteFileAtomically(out / "metrics.md", markdown);
+  return markdown;
+}
+
+}  // namespace pano4d

@@ -1,0 +1,148 @@
+#include "evaluation/evaluate.h"
+
+#include <cmath>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <gtest/gtest.h>
+
+#include "evaluation/synth_generate.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+
+const std::filesystem::path kMeta =
+    std::filesystem::path(PANO4D_SOURCE_DIR) / "datasets_meta";
+
+// The tiny synthetic scene, and "renders" that are its 2x validation
+// frames with seeded noise (so every metric is finite and below perfect).
+struct Fixture {
+  testing::TempDir dir;
+  Dataset dataset;
+  std::filesystem::path renders;
+  Fixture() {
+    synth::GenerateSynthScene({"tiny", 0, false}, dir / "scene");
+    dataset = LoadDataset(dir / "scene", 2);
+    renders = dir / "renders";
+    std::mt19937 rng(1);
+    std::normal_distribution<float> noise(0.0f, 0.03f);
+    for (const DatasetFrame& f : dataset.val) {
+      Image image = ReadImage(f.rgb);
+      for (int y = 0; y < image.height(); ++y) {
+        for (int x = 0; x < image.width(); ++x) {
+          for (int c = 0; c < 3; ++c) image.at(x, y)[c] += noise(rng);
+        }
+      }
+      WriteImage(renders / (f.id + ".png"), image);
+    }
+  }
+};
+
+TEST(EvaluateTest, ScoresEveryFrameWithMaskedAndUnseenMetrics) {
+  Fixture fx;
+  const EvaluationResult r = EvaluateRenders(fx.dataset, fx.renders, {});
+  ASSERT_EQ(r.frames.size(), 16u);
+  double psnr_sum = 0;
+  for (const FrameMetrics& m : r.frames) {
+    ASSERT_TRUE(m.values[0].has_value());
+    psnr_sum += *m.values[0];
+    EXPECT_GT(*m.values[0], 20.0);
+    EXPECT_LT(*m.values[0], 40.0);
+    EXPECT_GE(m.covisible_fraction, 0.0);
+    EXPECT_FALSE(m.values[2].has_value());  // LPIPS: n/a
+  }
+  EXPECT_NEAR(*r.mean[0], psnr_sum / 16, 1e-12);  // a plain mean over frames
+  for (const char* key : {"psnr", "ssim", "mpsnr", "mssim", "upsnr", "ussim",
+                          "mssim_strict", "ussim_strict"}) {
+    const auto k =
+        std::find(kMetricKeys.begin(), kMetricKeys.end(), std::string(key)) -
+        kMetricKeys.begin();
+    EXPECT_TRUE(r.mean[k].has_value()) << key;
+  }
+}
+
+TEST(EvaluateTest, JsonMarkdownAndCsvAgree) {
+  Fixture fx;
+  const EvaluationResult r = EvaluateRenders(fx.dataset, fx.renders, {});
+  const auto out = fx.dir / "metrics";
+  const std::string markdown = WriteEvaluation(r, out, kMeta);
+  const Json json = ReadJson(out / "metrics.json");
+  for (const char* key : kMetricKeys)
+    ASSERT_TRUE(json["mean"].contains(key)) << key;
+  EXPECT_TRUE(json["mean"]["lpips"].is_null());
+  EXPECT_EQ(json["frames"], 16);
+
+  // The pano4d row of the Markdown table shows the JSON's means.
+  std::smatch row;
+  ASSERT_TRUE(std::regex_search(markdown, row,
+                                std::regex(R"(\| pano4d \|([^\n]*)\n)")));
+  std::vector<std::string> cells;
+  std::stringstream stream(row[1].str());
+  for (std::string cell; std::getline(stream, cell, '|');) {
+    cells.push_back(std::regex_replace(cell, std::regex(R"(^\s+|\s+$)"), ""));
+  }
+  ASSERT_GE(cells.size(), 9u);
+  for (std::size_t k = 0; k < 9; ++k) {
+    const Json& v = json["mean"][kMetricKeys[k]];
+    if (v.is_null()) {
+      EXPECT_EQ(cells[k], "n/a") << kMetricKeys[k];
+    } else {
+      const double precision =
+          std::string(kMetricKeys[k]).find("psnr") != std::string::npos
+              ? 0.005
+              : 0.0005;
+      EXPECT_NEAR(std::stod(cells[k]), v.get<double>(), precision)
+          << kMetricKeys[k];
+    }
+  }
+  // The paper's rows sit beside pano4d's.
+  EXPECT_NE(markdown.find("PanoGaussian (Ours) (paper) | 18.71"),
+            std::string::npos)
+      << markdown;
+  // One CSV line per frame plus the header.
+  const std::string csv = ReadTextFile(out / "per_frame.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 17);
+}
+
+TEST(EvaluateTest, MissingMismatchedAndNonFiniteRendersAreErrors) {
+  Fixture fx;
+  const auto victim = fx.renders / (fx.dataset.val[3].id + ".png");
+  std::filesystem::remove(victim);
+  try {
+    EvaluateRenders(fx.dataset, fx.renders, {});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "1 of 16 renders are missing (first: 1_00003.png)"),
+              std::string::npos)
+        << e.what();
+  }
+  WriteImage(victim, Image(10, 10));
+  try {
+    EvaluateRenders(fx.dataset, fx.renders, {});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), victim.string());
+    EXPECT_EQ(e.field(), "size");
+  }
+  std::filesystem::remove(victim);
+  Image nan_image = ReadImage(fx.dataset.val[3].rgb);
+  nan_image.at(2, 2)[1] = std::nanf("");
+  cv::imwrite((fx.renders / (fx.dataset.val[3].id + ".exr")).string(),
+              nan_image.mat());
+  EXPECT_THROW(EvaluateRenders(fx.dataset, fx.renders, {}), Error);
+  EXPECT_THROW(EvaluateRenders(fx.dataset, fx.renders, {"test", {}}), Error);
+  EXPECT_THROW(EvaluateRenders(fx.dataset, fx.renders, {"val", "alex.pth"}),
+               Error);
+}
+
+}  // namespace
+}  // namespace pano4d
