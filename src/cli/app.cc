@@ -89,6 +89,7 @@ int Main(int argc, char** argv) {
   AddDatasetCommand(app, &action);
   AddSynthCommand(app, &action);
   AddEvalCommand(app, &action);
+  AddPlotCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

@@ -36,5 +36,6 @@ void AddBenchCommand(CLI::App& app, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);
+void AddPlotCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli
