@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "evaluation/lpips.h"
 #include "evaluation/metrics.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
@@ -75,11 +76,9 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
   if (options.split != "val" && options.split != "train") {
     throw Error("--split", "", options.split, "use val or train");
   }
+  std::optional<Lpips> lpips;
   if (!options.lpips_weights.empty()) {
-    throw Error("--lpips-weights", "", options.lpips_weights.string(),
-                "LPIPS is not built yet in this version of pano4d; run without "
-                "this flag (the "
-                "LPIPS columns then read n/a)");
+    lpips = Lpips::Load(options.lpips_weights);
   }
   const std::vector<DatasetFrame>& frames =
       options.split == "val" ? dataset.val : dataset.train;
@@ -131,6 +130,7 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
     m.time_id = f.time_id;
     m.values[kPsnr] = Psnr(a, b);
     m.values[kSsim] = Ssim(a, b)->dycheck;
+    if (lpips) m.values[kLpips] = lpips->Score(a, b);
     if (!f.covisible.empty()) {
       ++with_mask;
       const cv::Mat raw = ReadMask(f.covisible);
@@ -144,6 +144,10 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
       m.covisible_fraction = cv::mean(covisible)[0];
       m.values[kMpsnr] = Psnr(a, b, covisible);
       m.values[kUpsnr] = Psnr(a, b, unseen);
+      if (lpips) {
+        m.values[kMlpips] = lpips->Score(a, b, covisible);
+        m.values[kUlpips] = lpips->Score(a, b, unseen);
+      }
       if (const auto s = Ssim(a, b, covisible)) {
         m.values[kMssim] = s->dycheck;
         m.values[kMssimStrict] = s->strict;
@@ -176,9 +180,12 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
   }
 
   result.notes.push_back(
-      "LPIPS: n/a, no AlexNet LPIPS weights were given (--lpips-weights; not "
-      "built yet in this "
-      "version)");
+      lpips ? "LPIPS: AlexNet v0.1, the spatial map averaged over the mask "
+              "with both images multiplied by it (as DyCheck); weights from " +
+                  options.lpips_weights.string()
+            : std::string("LPIPS: n/a, no AlexNet LPIPS weights were given "
+                          "(--lpips-weights; see "
+                          "scripts/lpips_weights_from_torch.py)"));
   result.notes.push_back(
       "SSIM columns are DyCheck's masked SSIM, in which windows wholly outside "
       "the mask count as "

@@ -47,8 +47,10 @@ std::vector<LlffCamera> LlffCameras(const NpyArray& array,
                                     int height) {
   if (array.shape.size() != 2 || array.shape[1] != 17 || array.shape[0] < 1) {
     std::string shape;
-    for (const auto d : array.shape)
-      shape += (shape.empty() ? "" : " x ") + std::to_string(d);
+    for (const auto d : array.shape) {
+      if (!shape.empty()) shape += " x ";
+      shape += std::to_string(d);
+    }
     throw Error(source, "shape", shape,
                 "poses_bounds.npy must be N x 17 (LLFF)");
   }

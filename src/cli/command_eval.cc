@@ -46,8 +46,8 @@ void AddEvalCommand(CLI::App& app, Action* action) {
   auto options = std::make_shared<EvalOptions>();
   CLI::App* sub =
       app.add_subcommand("eval",
-                         "DyCheck metrics of renders: PSNR, SSIM (LPIPS when "
-                         "built), each full, on covisible pixels "
+                         "DyCheck metrics of renders: PSNR, SSIM, LPIPS (with "
+                         "--lpips-weights), each full, on covisible pixels "
                          "(m*) and on unseen pixels (u*); per-frame CSV, mean "
                          "JSON and a Markdown table beside the "
                          "paper's numbers");
@@ -65,7 +65,8 @@ void AddEvalCommand(CLI::App& app, Action* action) {
                   "Output folder (default: <renders>/metrics)");
   sub->add_option(
       "--lpips-weights", options->lpips_weights,
-      "AlexNet LPIPS weights (not built yet: without them LPIPS reads n/a)");
+      "Folder of LPIPS AlexNet v0.1 weights (.npy files; see "
+      "scripts/lpips_weights_from_torch.py); without it LPIPS reads n/a");
   sub->add_option("--factor", options->factor,
                   "Resolution of the dataset files (DyCheck: 2)")
       ->check(CLI::IsMember({1, 2}))

@@ -112,6 +112,20 @@ TEST(EvaluateTest, JsonMarkdownAndCsvAgree) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 17);
 }
 
+TEST(EvaluateTest, LpipsColumnsWithWeights) {
+  // The narrow AlexNet-topology network of the LPIPS fixture stands in for
+  // the real weights, which are not on these machines.
+  Fixture fx;
+  const EvaluationResult r = EvaluateRenders(
+      fx.dataset, fx.renders,
+      {"val", std::filesystem::path(PANO4D_SOURCE_DIR) / "tests/data/lpips"});
+  for (std::size_t k : {2, 5, 8}) {  // lpips, mlpips, ulpips
+    ASSERT_TRUE(r.mean[k].has_value()) << kMetricKeys[k];
+    EXPECT_GT(*r.mean[k], 0.0);
+    EXPECT_TRUE(std::isfinite(*r.mean[k]));
+  }
+}
+
 TEST(EvaluateTest, MissingMismatchedAndNonFiniteRendersAreErrors) {
   Fixture fx;
   const auto victim = fx.renders / (fx.dataset.val[3].id + ".png");
