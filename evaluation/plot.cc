@@ -5,11 +5,10 @@
 #include <cstdio>
 #include <limits>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
-#include "src/core/file.h"
+#include "src/core/image.h"
 #include "src/core/run_recorder.h"
 
 namespace pano4d {
@@ -192,12 +191,7 @@ void PlotRunLog(const std::filesystem::path& csv,
                       : title;
   options.y_label = all_psnr ? "PSNR (dB)" : "value";
   const cv::Mat image = DrawPlot(series, options);
-  std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", image, bytes))
-    throw Error::In(png.string(), "PNG encoding failed");
-  WriteFileAtomically(
-      png, std::string_view(reinterpret_cast<const char*>(bytes.data()),
-                            bytes.size()));
+  WritePng8(png, image);
 }
 
 }  // namespace pano4d

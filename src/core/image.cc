@@ -226,13 +226,23 @@ void WriteMask(const std::filesystem::path& path, const cv::Mat& mask) {
     throw Error(path.string(), "type", std::to_string(mask.type()),
                 "a mask must be CV_8UC1");
   }
+  WritePng8(path, mask);
+}
+
+void WritePng8(const std::filesystem::path& path, const cv::Mat& image) {
+  if (image.depth() != CV_8U ||
+      (image.channels() != 1 && image.channels() != 3)) {
+    throw Error(path.string(), "type", std::to_string(image.type()),
+                "expected an 8-bit grey or BGR image");
+  }
   if (path.extension() != ".png") {
     throw Error(path.string(), "extension", path.extension().string(),
-                "masks are written as .png");
+                "expected a .png path");
   }
   std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", mask, bytes))
+  if (!cv::imencode(".png", image, bytes)) {
     throw Error::In(path.string(), "PNG encoding failed");
+  }
   WriteFileAtomically(
       path, std::string_view(reinterpret_cast<const char*>(bytes.data()),
                              bytes.size()));

@@ -67,5 +67,8 @@ void WriteImage(const std::filesystem::path& path, const Image& image);
 // lossless PNG atomically.
 cv::Mat ReadMask(const std::filesystem::path& path);
 void WriteMask(const std::filesystem::path& path, const cv::Mat& mask);
+// An 8-bit grey or BGR matrix (OpenCV's own order, e.g. a plot drawn with
+// OpenCV) as a lossless PNG, written atomically.
+void WritePng8(const std::filesystem::path& path, const cv::Mat& image);
 
 }  // namespace pano4d
