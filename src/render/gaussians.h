@@ -1,0 +1,52 @@
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "src/core/posed_camera.h"
+
+namespace pano4d {
+
+// 3D Gaussians in structure-of-arrays layout: the rasterizer's loops read
+// one attribute over many Gaussians. Values are the optimiser's parameters:
+//   means        N x 3, world coordinates
+//   log_scales   N x 3, log of the standard deviations along the local axes
+//   quats        N x 4, (w, x, y, z), any non-zero norm (normalised on use)
+//   opacities    N, logits (opacity = sigmoid)
+//   sh           N x K x 3, K = (sh_degree + 1)^2 coefficients per channel,
+//                coefficient-major: sh[(n K + k) 3 + c]
+struct GaussianModel {
+  int sh_degree = 0;  // 0..3
+  std::vector<float> means;
+  std::vector<float> log_scales;
+  std::vector<float> quats;
+  std::vector<float> opacities;
+  std::vector<float> sh;
+
+  std::size_t size() const { return opacities.size(); }
+  int sh_coefficients() const { return (sh_degree + 1) * (sh_degree + 1); }
+  void Resize(std::size_t n);
+  // Throws pano4d::Error when the arrays disagree in size or the degree is
+  // outside 0..3.
+  void Check() const;
+};
+
+// A pinhole camera as the rasterizer uses it (distortion is removed
+// upstream, e.g. by COLMAP's image_undistorter).
+struct RasterCamera {
+  int width = 0;
+  int height = 0;
+  float fx = 1, fy = 1, cx = 0, cy = 0;
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  // cam_from_world
+  Eigen::Vector3f translation = Eigen::Vector3f::Zero();
+
+  // Throws pano4d::Error for a camera with distortion.
+  static RasterCamera FromPosed(const PosedCamera& camera);
+  Eigen::Vector3f Center() const {
+    return -(rotation.transpose() * translation);
+  }
+};
+
+}  // namespace pano4d

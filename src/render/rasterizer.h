@@ -1,0 +1,102 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "src/render/gaussians.h"
+
+namespace pano4d {
+
+// Numeric guards of the rasterizer, as in 3D Gaussian splatting:
+// Points closer than this to the camera plane are culled: the EWA Jacobian
+// grows as 1/z^2.
+inline constexpr float kNearPlane = 0.01f;
+// Added to the 2D covariance: a pixel-sized low-pass so that a Gaussian
+// thinner than a pixel still covers one (anti-aliasing).
+inline constexpr float kLowPass = 0.3f;
+// The Jacobian is evaluated with the point clamped to 1.3 x the field of
+// view: points far outside the image would otherwise get huge footprints.
+inline constexpr float kFovClamp = 1.3f;
+// Alpha never reaches 1, so transmittance stays invertible for backward.
+inline constexpr float kMaxAlpha = 0.99f;
+// Contributions under 1/255 cannot change an 8-bit pixel: skipped.
+inline constexpr float kMinAlpha = 1.0f / 255.0f;
+// Blending stops once less than this much light gets through.
+inline constexpr float kMinTransmittance = 1e-4f;
+// A quaternion shorter than this is treated as the identity rotation
+// instead of dividing by (almost) zero.
+inline constexpr float kMinQuaternionNorm = 1e-12f;
+// Footprint radii are clamped here (pixels) so that enormous Gaussians do
+// not overflow the integer tile arithmetic; the tile range clamps anyway.
+inline constexpr float kMaxRadius = 1e6f;
+// Expected depth divides by accumulated alpha; below this the pixel holds
+// no surface and its depth is 0.
+inline constexpr float kMinAlphaForDepth = 1e-6f;
+inline constexpr int kTileSize = 16;
+
+struct RasterSettings {
+  Eigen::Vector3f background = Eigen::Vector3f::Zero();
+};
+
+// What a forward pass produces: row-major images.
+struct RenderOutput {
+  int width = 0;
+  int height = 0;
+  std::vector<float> rgb;    // H x W x 3, background composited
+  std::vector<float> depth;  // H x W, expected z-depth (0 where alpha ~ 0)
+  std::vector<float> alpha;  // H x W, accumulated opacity
+};
+
+// The per-Gaussian result of projection, structure of arrays. A culled
+// Gaussian has radius 0.
+struct ProjectedGaussians {
+  std::vector<float> x, y;   // pixel position of the mean
+  std::vector<float> depth;  // camera z
+  std::vector<float> conic_a, conic_b,
+      conic_c;                 // inverse 2D covariance [a b; b c]
+  std::vector<float> opacity;  // sigmoid of the logit
+  std::vector<float> r, g, b;  // view-dependent colour
+  std::vector<int> radius;     // 3 sigma, pixels; 0 = culled
+  std::vector<int> tile_x0, tile_y0, tile_x1,
+      tile_y1;                        // tiles touched, [x0, x1)
+  std::vector<std::uint8_t> clamped;  // N x 3: SH colour hit max(0, .)
+  void Resize(std::size_t n);
+};
+
+// A tiled CPU rasterizer. Buffers live in the object and are reused, so
+// steady-state rendering does not allocate. Results do not depend on the
+// number of threads: tiles are independent and the sort is total.
+class Rasterizer {
+ public:
+  void Forward(const GaussianModel& model, const RasterCamera& camera,
+               const RasterSettings& settings, RenderOutput* out);
+
+  // Forward state kept for the backward pass.
+  const ProjectedGaussians& projected() const { return projected_; }
+  const std::vector<float>& final_transmittance() const { return final_t_; }
+  const std::vector<std::uint32_t>& last_contributor() const { return last_; }
+  const std::vector<std::uint32_t>& sorted_ids() const { return ids_; }
+  const std::vector<std::uint32_t>& tile_ranges() const {
+    return ranges_;
+  }  // 2 per tile
+
+ private:
+  void Project(const GaussianModel& model, const RasterCamera& camera);
+  void Bin(const RasterCamera& camera);
+  void Blend(const RasterCamera& camera, const RasterSettings& settings,
+             RenderOutput* out);
+
+  ProjectedGaussians projected_;
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> ids_;
+  std::vector<std::uint32_t> order_;    // sort permutation
+  std::vector<std::uint32_t> scratch_;  // ids being permuted
+  std::vector<std::uint32_t> offsets_;
+  std::vector<std::uint32_t> ranges_;
+  std::vector<float> final_t_;
+  std::vector<std::uint32_t> last_;
+};
+
+}  // namespace pano4d

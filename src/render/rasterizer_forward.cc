@@ -1,0 +1,250 @@
+// Forward pass: projection, tile binning with a (tile, depth) sort, and
+// per-tile front-to-back alpha blending.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <Eigen/Geometry>
+
+#include "src/core/error.h"
+#include "src/render/rasterizer.h"
+#include "src/render/sh.h"
+
+namespace pano4d {
+
+void ProjectedGaussians::Resize(std::size_t n) {
+  for (auto* v :
+       {&x, &y, &depth, &conic_a, &conic_b, &conic_c, &opacity, &r, &g, &b})
+    v->resize(n);
+  for (auto* v : {&radius, &tile_x0, &tile_y0, &tile_x1, &tile_y1})
+    v->resize(n);
+  clamped.resize(3 * n);
+}
+
+void Rasterizer::Project(const GaussianModel& model,
+                         const RasterCamera& camera) {
+  const std::size_t n = model.size();
+  projected_.Resize(n);
+  const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
+  const int tiles_y = (camera.height + kTileSize - 1) / kTileSize;
+  const float lim_x = kFovClamp * 0.5f * camera.width / camera.fx;
+  const float lim_y = kFovClamp * 0.5f * camera.height / camera.fy;
+  const Eigen::Vector3f center = camera.Center();
+  const int k_count = model.sh_coefficients();
+  ProjectedGaussians& p = projected_;
+
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
+    p.radius[i] = 0;
+    const Eigen::Vector3f mean(model.means[3 * i], model.means[3 * i + 1],
+                               model.means[3 * i + 2]);
+    const Eigen::Vector3f t = camera.rotation * mean + camera.translation;
+    if (!(t.z() > kNearPlane) || !t.allFinite()) continue;
+
+    // 3D covariance R S S^T R^T from the normalised quaternion and scales.
+    Eigen::Vector4f q(model.quats[4 * i], model.quats[4 * i + 1],
+                      model.quats[4 * i + 2], model.quats[4 * i + 3]);
+    const float q_norm = q.norm();
+    q = q_norm > kMinQuaternionNorm ? Eigen::Vector4f(q / q_norm)
+                                    : Eigen::Vector4f(1, 0, 0, 0);
+    const Eigen::Matrix3f rot =
+        Eigen::Quaternionf(q(0), q(1), q(2), q(3)).toRotationMatrix();
+    const Eigen::Vector3f scale(std::exp(model.log_scales[3 * i]),
+                                std::exp(model.log_scales[3 * i + 1]),
+                                std::exp(model.log_scales[3 * i + 2]));
+    const Eigen::Matrix3f m = rot * scale.asDiagonal();
+    const Eigen::Matrix3f sigma = m * m.transpose();
+
+    // EWA: J W Sigma W^T J^T with the point clamped to kFovClamp x FOV.
+    const float inv_z = 1.0f / t.z();
+    const float tx = std::clamp(t.x() * inv_z, -lim_x, lim_x) * t.z();
+    const float ty = std::clamp(t.y() * inv_z, -lim_y, lim_y) * t.z();
+    Eigen::Matrix<float, 2, 3> j;
+    j << camera.fx * inv_z, 0, -camera.fx * tx * inv_z * inv_z,  //
+        0, camera.fy * inv_z, -camera.fy * ty * inv_z * inv_z;
+    const Eigen::Matrix<float, 2, 3> jw = j * camera.rotation;
+    const Eigen::Matrix2f cov =
+        jw * sigma * jw.transpose() + kLowPass * Eigen::Matrix2f::Identity();
+    const float det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
+    if (!(det > 0) || !std::isfinite(det)) continue;
+
+    const float mid = 0.5f * (cov(0, 0) + cov(1, 1));
+    const float lambda = mid + std::sqrt(std::max(0.1f, mid * mid - det));
+    const float radius =
+        std::min(kMaxRadius, std::ceil(3.0f * std::sqrt(lambda)));
+    const float px = camera.fx * t.x() * inv_z + camera.cx;
+    const float py = camera.fy * t.y() * inv_z + camera.cy;
+    if (!std::isfinite(radius) || !std::isfinite(px) || !std::isfinite(py))
+      continue;
+    // Tiles touched by the 3-sigma square around the mean, [x0, x1).
+    const auto tile = [](float v, int tiles) {
+      return static_cast<int>(
+          std::clamp(v / kTileSize, 0.0f, static_cast<float>(tiles)));
+    };
+    const int x0 = tile(px - radius, tiles_x),
+              x1 = tile(px + radius + kTileSize - 1, tiles_x);
+    const int y0 = tile(py - radius, tiles_y),
+              y1 = tile(py + radius + kTileSize - 1, tiles_y);
+    if (x1 <= x0 || y1 <= y0) continue;
+
+    p.x[i] = px;
+    p.y[i] = py;
+    p.depth[i] = t.z();
+    p.conic_a[i] = cov(1, 1) / det;
+    p.conic_b[i] = -cov(0, 1) / det;
+    p.conic_c[i] = cov(0, 0) / det;
+    p.opacity[i] = 1.0f / (1.0f + std::exp(-model.opacities[i]));
+    bool clamped[3];
+    const Eigen::Vector3f color =
+        ShColor(model.sh_degree,
+                model.sh.data() + static_cast<std::size_t>(i) * k_count * 3,
+                (mean - center).normalized(), clamped);
+    p.r[i] = color.x();
+    p.g[i] = color.y();
+    p.b[i] = color.z();
+    for (int c = 0; c < 3; ++c) p.clamped[3 * i + c] = clamped[c];
+    p.tile_x0[i] = x0;
+    p.tile_x1[i] = x1;
+    p.tile_y0[i] = y0;
+    p.tile_y1[i] = y1;
+    p.radius[i] = static_cast<int>(radius);
+  }
+}
+
+void Rasterizer::Bin(const RasterCamera& camera) {
+  const std::size_t n = projected_.radius.size();
+  const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
+  const int tiles_y = (camera.height + kTileSize - 1) / kTileSize;
+  const ProjectedGaussians& p = projected_;
+
+  offsets_.resize(n + 1);
+  offsets_[0] = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t count =
+        p.radius[i] > 0
+            ? static_cast<std::uint64_t>(p.tile_x1[i] - p.tile_x0[i]) *
+                  (p.tile_y1[i] - p.tile_y0[i])
+            : 0;
+    if (offsets_[i] + count > UINT32_MAX) {
+      throw Error("rasterizer", "tile entries",
+                  std::to_string(offsets_[i] + count),
+                  "more than 2^32 (Gaussian, tile) pairs");
+    }
+    offsets_[i + 1] = static_cast<std::uint32_t>(offsets_[i] + count);
+  }
+  const std::uint32_t total = offsets_[n];
+  keys_.resize(total);
+  ids_.resize(total);
+  // Key: tile in the high 32 bits, the depth's float bits (monotonic for
+  // positive floats) in the low 32; the Gaussian index breaks ties, so the
+  // order is total and the same whatever the threads.
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
+    if (p.radius[i] == 0) continue;
+    std::uint32_t depth_bits;
+    std::memcpy(&depth_bits, &p.depth[i], sizeof(depth_bits));
+    std::uint32_t k = offsets_[i];
+    for (int ty = p.tile_y0[i]; ty < p.tile_y1[i]; ++ty) {
+      for (int tx = p.tile_x0[i]; tx < p.tile_x1[i]; ++tx) {
+        keys_[k] =
+            (static_cast<std::uint64_t>(ty * tiles_x + tx) << 32) | depth_bits;
+        ids_[k] = static_cast<std::uint32_t>(i);
+        ++k;
+      }
+    }
+  }
+  order_.resize(total);
+  for (std::uint32_t k = 0; k < total; ++k) order_[k] = k;
+  std::sort(
+      order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return keys_[a] != keys_[b] ? keys_[a] < keys_[b] : ids_[a] < ids_[b];
+      });
+  // Apply the permutation (ids only; tile ranges come from the sorted keys).
+  scratch_.resize(total);
+  for (std::uint32_t k = 0; k < total; ++k) scratch_[k] = ids_[order_[k]];
+  ranges_.assign(2 * static_cast<std::size_t>(tiles_x) * tiles_y, 0);
+  for (std::uint32_t k = 0; k < total; ++k) {
+    const std::uint32_t tile =
+        static_cast<std::uint32_t>(keys_[order_[k]] >> 32);
+    if (k == 0 ||
+        static_cast<std::uint32_t>(keys_[order_[k - 1]] >> 32) != tile)
+      ranges_[2 * tile] = k;
+    ranges_[2 * tile + 1] = k + 1;
+  }
+  ids_.swap(scratch_);
+}
+
+void Rasterizer::Blend(const RasterCamera& camera,
+                       const RasterSettings& settings, RenderOutput* out) {
+  const int width = camera.width, height = camera.height;
+  const int tiles_x = (width + kTileSize - 1) / kTileSize;
+  const int tiles_y = (height + kTileSize - 1) / kTileSize;
+  out->width = width;
+  out->height = height;
+  out->rgb.resize(static_cast<std::size_t>(width) * height * 3);
+  out->depth.resize(static_cast<std::size_t>(width) * height);
+  out->alpha.resize(static_cast<std::size_t>(width) * height);
+  final_t_.resize(static_cast<std::size_t>(width) * height);
+  last_.resize(static_cast<std::size_t>(width) * height);
+  const ProjectedGaussians& p = projected_;
+
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
+    const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
+    const int x_begin = (tile % tiles_x) * kTileSize,
+              y_begin = (tile / tiles_x) * kTileSize;
+    for (int py = y_begin; py < std::min(y_begin + kTileSize, height); ++py) {
+      for (int px = x_begin; px < std::min(x_begin + kTileSize, width); ++px) {
+        // Pixel centres at +0.5, as the camera model.
+        const float fx = px + 0.5f, fy = py + 0.5f;
+        float t = 1.0f, cr = 0, cg = 0, cb = 0, cd = 0;
+        std::uint32_t last = begin;
+        for (std::uint32_t k = begin; k < end; ++k) {
+          const std::uint32_t g = ids_[k];
+          const float dx = fx - p.x[g], dy = fy - p.y[g];
+          const float power =
+              -0.5f * (p.conic_a[g] * dx * dx + p.conic_c[g] * dy * dy) -
+              p.conic_b[g] * dx * dy;
+          if (power > 0) continue;  // rounding outside the ellipse's domain
+          const float alpha =
+              std::min(kMaxAlpha, p.opacity[g] * std::exp(power));
+          if (alpha < kMinAlpha) continue;
+          const float next_t = t * (1 - alpha);
+          if (next_t < kMinTransmittance) break;
+          const float w = alpha * t;
+          cr += w * p.r[g];
+          cg += w * p.g[g];
+          cb += w * p.b[g];
+          cd += w * p.depth[g];
+          t = next_t;
+          last = k + 1;
+        }
+        const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
+        out->rgb[3 * pixel] = cr + t * settings.background.x();
+        out->rgb[3 * pixel + 1] = cg + t * settings.background.y();
+        out->rgb[3 * pixel + 2] = cb + t * settings.background.z();
+        const float alpha = 1 - t;
+        out->alpha[pixel] = alpha;
+        out->depth[pixel] = alpha > kMinAlphaForDepth ? cd / alpha : 0.0f;
+        final_t_[pixel] = t;
+        last_[pixel] = last;
+      }
+    }
+  }
+}
+
+void Rasterizer::Forward(const GaussianModel& model, const RasterCamera& camera,
+                         const RasterSettings& settings, RenderOutput* out) {
+  model.Check();
+  if (camera.width <= 0 || camera.height <= 0) {
+    throw Error(
+        "rasterizer", "camera",
+        std::to_string(camera.width) + "x" + std::to_string(camera.height),
+        "image size must be positive");
+  }
+  Project(model, camera);
+  Bin(camera);
+  Blend(camera, settings, out);
+}
+
+}  // namespace pano4d

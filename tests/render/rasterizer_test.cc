@@ -1,0 +1,207 @@
+#include "src/render/rasterizer.h"
+
+#include <omp.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "src/core/camera.h"
+
+namespace pano4d {
+namespace {
+
+constexpr float kC0 = 0.28209479177387814f;
+
+RasterCamera TestCamera() {
+  RasterCamera c;
+  c.width = 128;
+  c.height = 96;
+  c.fx = c.fy = 100;
+  c.cx = 64;
+  c.cy = 48;
+  return c;  // at the origin, looking down +z
+}
+
+// Appends one isotropic Gaussian with colour `rgb` (degree-0 SH).
+void Add(GaussianModel* m, const Eigen::Vector3f& mean, float scale,
+         float opacity, const Eigen::Vector3f& rgb,
+         const Eigen::Vector4f& quat = {1, 0, 0, 0}) {
+  const std::size_t i = m->size();
+  m->Resize(i + 1);
+  for (int k = 0; k < 3; ++k) {
+    m->means[3 * i + k] = mean(k);
+    m->log_scales[3 * i + k] = std::log(scale);
+    m->sh[3 * i + k] = (rgb(k) - 0.5f) / kC0;
+  }
+  for (int k = 0; k < 4; ++k) m->quats[4 * i + k] = quat(k);
+  m->opacities[i] = std::log(opacity / (1 - opacity));
+}
+
+bool AllFinite(const RenderOutput& out) {
+  for (const auto* v : {&out.rgb, &out.depth, &out.alpha}) {
+    for (const float x : *v) {
+      if (!std::isfinite(x)) return false;
+    }
+  }
+  return true;
+}
+
+TEST(RasterizerTest, SmallGaussianLandsWhereTheCameraProjects) {
+  const RasterCamera camera = TestCamera();
+  const Camera model_camera{
+      CameraModelId::kPinhole, 128, 96, {100, 100, 64, 48}};
+  for (const Eigen::Vector3f& point : {Eigen::Vector3f(0.1f, -0.05f, 2.0f),
+                                       Eigen::Vector3f(-0.7f, 0.33f, 3.1f)}) {
+    GaussianModel model;
+    Add(&model, point, 0.01f, 0.5f, {1, 1, 1});
+    Rasterizer rasterizer;
+    RenderOutput out;
+    rasterizer.Forward(model, camera, {}, &out);
+    double sum = 0, sx = 0, sy = 0;
+    for (int y = 0; y < out.height; ++y) {
+      for (int x = 0; x < out.width; ++x) {
+        const double a = out.alpha[y * out.width + x];
+        sum += a;
+        sx += a * (x + 0.5);
+        sy += a * (y + 0.5);
+      }
+    }
+    const Eigen::Vector2d expected =
+        *model_camera.Project(point.cast<double>());
+    EXPECT_LT((Eigen::Vector2d(sx / sum, sy / sum) - expected).norm(), 0.1)
+        << point.transpose();
+  }
+}
+
+TEST(RasterizerTest, BlendsExactlyAtAPixelCentre) {
+  // Mean on the centre of pixel (40, 30): there alpha = opacity exactly.
+  const RasterCamera camera = TestCamera();
+  const float z = 2.0f;
+  const Eigen::Vector3f mean((40.5f - 64) / 100 * z, (30.5f - 48) / 100 * z, z);
+  GaussianModel model;
+  Add(&model, mean, 0.02f, 0.6f, {0.8f, 0.2f, 0.4f});
+  RasterSettings settings;
+  settings.background = {0.1f, 0.3f, 0.5f};
+  Rasterizer rasterizer;
+  RenderOutput out;
+  rasterizer.Forward(model, camera, settings, &out);
+  const std::size_t p = 30 * 128 + 40;
+  EXPECT_NEAR(out.alpha[p], 0.6f, 1e-5);
+  EXPECT_NEAR(out.rgb[3 * p], 0.8f * 0.6f + 0.1f * 0.4f, 1e-5);
+  EXPECT_NEAR(out.rgb[3 * p + 2], 0.4f * 0.6f + 0.5f * 0.4f, 1e-5);
+  EXPECT_NEAR(out.depth[p], z, 1e-4);
+  EXPECT_NEAR(rasterizer.final_transmittance()[p], 0.4f, 1e-5);
+}
+
+TEST(RasterizerTest, NearerGaussianWinsWhateverTheArrayOrder) {
+  const RasterCamera camera = TestCamera();
+  GaussianModel a, b;
+  Add(&a, {0, 0, 2}, 0.2f, 0.95f, {1, 0, 0});
+  Add(&a, {0, 0, 4}, 0.4f, 0.95f, {0, 0, 1});
+  Add(&b, {0, 0, 4}, 0.4f, 0.95f, {0, 0, 1});
+  Add(&b, {0, 0, 2}, 0.2f, 0.95f, {1, 0, 0});
+  Rasterizer r;
+  RenderOutput out_a, out_b;
+  r.Forward(a, camera, {}, &out_a);
+  r.Forward(b, camera, {}, &out_b);
+  EXPECT_EQ(out_a.rgb, out_b.rgb);
+  const std::size_t centre = 48 * 128 + 64;
+  EXPECT_GT(out_a.rgb[3 * centre], 0.9f);
+  EXPECT_LT(out_a.rgb[3 * centre + 2], 0.1f);
+}
+
+GaussianModel RandomScene(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1, 1);
+  GaussianModel m;
+  m.sh_degree = 1;
+  for (int i = 0; i < n; ++i) {
+    Add(&m, {1.5f * u(rng), 1.0f * u(rng), 3.0f + u(rng)},
+        0.03f * (1.5f + u(rng)), 0.5f + 0.4f * u(rng),
+        {0.5f + 0.4f * u(rng), 0.5f + 0.4f * u(rng), 0.5f + 0.4f * u(rng)},
+        {u(rng), u(rng), u(rng), u(rng)});
+  }
+  for (float& c : m.sh) c += 0.1f * u(rng);
+  return m;
+}
+
+TEST(RasterizerTest, SameBytesWithOneAndTwoThreads) {
+  const GaussianModel model = RandomScene(5000, 3);
+  const RasterCamera camera = TestCamera();
+  RenderOutput one, two;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  Rasterizer().Forward(model, camera, {}, &one);
+  omp_set_num_threads(2);
+  Rasterizer().Forward(model, camera, {}, &two);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.rgb.size(), two.rgb.size());
+  EXPECT_EQ(std::memcmp(one.rgb.data(), two.rgb.data(),
+                        one.rgb.size() * sizeof(float)),
+            0);
+  EXPECT_EQ(std::memcmp(one.depth.data(), two.depth.data(),
+                        one.depth.size() * sizeof(float)),
+            0);
+  EXPECT_TRUE(AllFinite(one));
+}
+
+TEST(RasterizerTest, StiffAndExtremeCasesStayFinite) {
+  const RasterCamera camera = TestCamera();
+  const std::vector<std::pair<const char*, GaussianModel>> cases = [] {
+    std::vector<std::pair<const char*, GaussianModel>> c;
+    GaussianModel m;
+    for (const float s : {1e-6f, 1e-3f, 1.0f, 1e3f})
+      Add(&m, {0, 0, 3}, s * 3, 0.5f, {1, 0, 0});
+    c.emplace_back("scales 1e-6 to 1e3 of the scene", m);
+    m = GaussianModel();
+    Add(&m, {0, 0, 3}, 1.0f, 0.5f, {0, 1, 0});
+    m.log_scales[0] = std::log(1e-6f);  // anisotropy 1e6
+    c.emplace_back("anisotropy 1e6", m);
+    m = GaussianModel();
+    Add(&m, {0, 0, 0.005f}, 0.5f, 0.9f, {1, 1, 1});  // straddles the near plane
+    Add(&m, {0, 0, -1}, 0.5f, 0.9f, {1, 1, 1});      // behind the camera
+    Add(&m, {0, 0, 0}, 0.5f, 0.9f, {1, 1, 1});       // at the centre
+    c.emplace_back("near plane and behind", m);
+    m = GaussianModel();
+    Add(&m, {(-3 - 64.0f) / 100 * 2, 0, 2}, 0.05f, 0.9f,
+        {1, 1, 1});  // past the left border
+    Add(&m, {(127.9f - 64) / 100 * 2, (95.9f - 48) / 100 * 2, 2}, 0.05f, 0.9f,
+        {1, 1, 1});
+    c.emplace_back("image border", m);
+    m = GaussianModel();
+    for (int i = 0; i < 100000; ++i)
+      Add(&m, {0, 0, 2 + 1e-5f * i}, 0.001f, 0.3f, {0.2f, 0.9f, 0.4f});
+    c.emplace_back("1e5 Gaussians on one pixel", m);
+    m = GaussianModel();
+    for (int i = 0; i < 50; ++i)
+      Add(&m, {0.01f * i, 0, 3}, 0.1f, 1e-9f, {1, 1, 1});
+    c.emplace_back("all transparent", m);
+    m = GaussianModel();
+    Add(&m, {0, 0, 3}, 0.1f, 0.5f, {1, 1, 1}, {0, 0, 0, 0});
+    c.emplace_back("zero quaternion", m);
+    return c;
+  }();
+  for (const auto& [name, model] : cases) {
+    Rasterizer r;
+    RenderOutput out;
+    r.Forward(model, camera, {}, &out);
+    EXPECT_TRUE(AllFinite(out)) << name;
+    for (const float a : out.alpha) {
+      ASSERT_GE(a, 0.0f) << name;
+      ASSERT_LE(a, 1.0f) << name;
+    }
+  }
+  // The all-transparent scene shows only the background.
+  RasterSettings settings;
+  settings.background = {0.2f, 0.4f, 0.6f};
+  RenderOutput out;
+  Rasterizer().Forward(cases[5].second, camera, settings, &out);
+  EXPECT_NEAR(out.rgb[0], 0.2f, 1e-6);
+  EXPECT_EQ(out.alpha[48 * 128 + 64], 0.0f);
+}
+
+}  // namespace
+}  // namespace pano4d
