@@ -1,6 +1,7 @@
 // pano4d bench: speed and accuracy tables. `bench camera` measures every
 // camera model: round-trip error over the whole image against the time of
 // one projection and one unprojection.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -8,14 +9,18 @@
 #include <string>
 #include <vector>
 
+#include <omp.h>
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
 #include "src/core/camera.h"
 #include "src/core/camera_check.h"
+#include "src/core/error.h"
 #include "src/core/json.h"
 #include "src/core/timer.h"
 #include "src/core/version.h"
+#include "src/render/bench_scene.h"
+#include "src/render/rasterizer.h"
 
 namespace pano4d::cli {
 namespace {
@@ -146,6 +151,112 @@ int RunBenchCamera(const BenchCameraOptions& options) {
   return kExitOk;
 }
 
+struct BenchRenderOptions {
+  std::vector<int> gaussians = {10000, 100000, 500000};
+  std::vector<std::string> sizes = {"480x360", "960x720"};
+  int width = 0;  // --width/--height: one size instead of the list
+  int height = 0;
+  int repeats = 10;
+  bool json = false;
+};
+
+int RunBenchRender(const BenchRenderOptions& options) {
+  const int threads = omp_get_max_threads();
+  if (!options.json) {
+    std::printf(
+        "pano4d %s bench render: random view-filling scene, mean 3-sigma "
+        "radius 4 px, "
+        "opacity 0.5; median of %d runs, %d threads\n",
+        kVersion, options.repeats, threads);
+    std::printf("%10s %10s %12s %8s %18s %14s %16s\n", "gaussians", "size",
+                "forward ms", "fps", "fwd+bwd ms", "visible", "evals/s");
+  }
+  std::vector<std::string> sizes = options.sizes;
+  if (options.width > 0 || options.height > 0) {
+    if (options.width <= 0 || options.height <= 0) {
+      throw Error(
+          "--width/--height", "",
+          std::to_string(options.width) + "x" + std::to_string(options.height),
+          "give both, positive");
+    }
+    sizes = {std::to_string(options.width) + "x" +
+             std::to_string(options.height)};
+  }
+  for (const std::string& size : sizes) {
+    int width = 0, height = 0;
+    if (std::sscanf(size.c_str(), "%dx%d", &width, &height) != 2 ||
+        width <= 0 || height <= 0) {
+      throw Error("--size", "", size, "expected WxH, e.g. 480x360");
+    }
+    const RasterCamera camera = BenchCamera(width, height);
+    for (const int n : options.gaussians) {
+      const GaussianModel model =
+          RandomViewFillingScene(static_cast<std::size_t>(n), camera, 4.0f, 1);
+      Rasterizer rasterizer;
+      RenderOutput out;
+      rasterizer.Forward(model, camera, {},
+                         &out);  // warm-up: buffers reach their size
+      std::vector<double> ms;
+      for (int r = 0; r < options.repeats; ++r) {
+        Timer timer;
+        rasterizer.Forward(model, camera, {}, &out);
+        ms.push_back(1e3 * timer.WallSeconds());
+      }
+      std::sort(ms.begin(), ms.end());
+      const double forward_ms = ms[ms.size() / 2];
+      const RasterStats& stats = rasterizer.stats();
+      const double evals_per_s = stats.pixel_evaluations / (forward_ms * 1e-3);
+      if (options.json) {
+        std::cout << Json{{"gaussians", n},
+                          {"width", width},
+                          {"height", height},
+                          {"threads", threads},
+                          {"forward_ms", forward_ms},
+                          {"forward_backward_ms", nullptr},
+                          {"fps", 1e3 / forward_ms},
+                          {"visible", stats.visible},
+                          {"pixel_evaluations_per_s", evals_per_s}}
+                         .dump()
+                  << "\n";
+      } else {
+        std::printf(
+            "%10d %10s %12.2f %8.1f %18s %14llu %16.3g\n", n, size.c_str(),
+            forward_ms, 1e3 / forward_ms, "n/a (no backward)",
+            static_cast<unsigned long long>(stats.visible), evals_per_s);
+      }
+    }
+  }
+  return kExitOk;
+}
+
+void AddBenchRender(CLI::App& bench, Action* action) {
+  auto options = std::make_shared<BenchRenderOptions>();
+  CLI::App* sub = bench.add_subcommand("render",
+                                       "Rasterizer speed: forward ms, fps and "
+                                       "Gaussian-pixel evaluations per second");
+  sub->add_option("--gaussians", options->gaussians,
+                  "Scene sizes (default 10k, 100k, 500k)")
+      ->delimiter(',');
+  sub->add_option("--size", options->sizes,
+                  "Image sizes WxH (default 480x360, 960x720)")
+      ->delimiter(',');
+  sub->add_option("--width", options->width,
+                  "Image width (with --height: one size)");
+  sub->add_option("--height", options->height,
+                  "Image height (with --width: one size)");
+  sub->add_option("--repeats", options->repeats,
+                  "Timed runs per case; the median is reported")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  sub->add_flag(
+      "--json", options->json,
+      "One JSON object per line and case (gaussians, width, height, threads, "
+      "forward_ms, forward_backward_ms)");
+  sub->callback([action, options] {
+    *action = [options] { return RunBenchRender(*options); };
+  });
+}
+
 }  // namespace
 
 void AddBenchCommand(CLI::App& app, Action* action) {
@@ -174,8 +285,7 @@ void AddBenchCommand(CLI::App& app, Action* action) {
     *action = [options] { return RunBenchCamera(*options); };
   });
 
-  AddPlannedCommand(*bench, "bench render",
-                    "Rasterizer forward and backward speed", action);
+  AddBenchRender(*bench, action);
   AddPlannedCommand(*bench, "bench stability",
                     "Stiff and extreme cases: count of non-finite values",
                     action);

@@ -65,6 +65,13 @@ struct ProjectedGaussians {
   void Resize(std::size_t n);
 };
 
+// Counts from the last forward pass, for benchmarks.
+struct RasterStats {
+  std::uint64_t visible = 0;            // Gaussians that survived projection
+  std::uint64_t tile_entries = 0;       // (Gaussian, tile) pairs
+  std::uint64_t pixel_evaluations = 0;  // (Gaussian, pixel) pairs blended
+};
+
 // A tiled CPU rasterizer. Buffers live in the object and are reused, so
 // steady-state rendering does not allocate. Results do not depend on the
 // number of threads: tiles are independent and the sort is total.
@@ -78,9 +85,9 @@ class Rasterizer {
   const std::vector<float>& final_transmittance() const { return final_t_; }
   const std::vector<std::uint32_t>& last_contributor() const { return last_; }
   const std::vector<std::uint32_t>& sorted_ids() const { return ids_; }
-  const std::vector<std::uint32_t>& tile_ranges() const {
-    return ranges_;
-  }  // 2 per tile
+  // [begin, end) into sorted_ids() for each tile.
+  const std::vector<std::uint32_t>& tile_ranges() const { return ranges_; }
+  const RasterStats& stats() const { return stats_; }
 
  private:
   void Project(const GaussianModel& model, const RasterCamera& camera);
@@ -97,6 +104,7 @@ class Rasterizer {
   std::vector<std::uint32_t> ranges_;
   std::vector<float> final_t_;
   std::vector<std::uint32_t> last_;
+  RasterStats stats_;
 };
 
 }  // namespace pano4d

@@ -188,7 +188,8 @@ void Rasterizer::Blend(const RasterCamera& camera,
   last_.resize(static_cast<std::size_t>(width) * height);
   const ProjectedGaussians& p = projected_;
 
-#pragma omp parallel for schedule(dynamic, 1)
+  std::uint64_t evaluations = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
     const int x_begin = (tile % tiles_x) * kTileSize,
@@ -219,6 +220,7 @@ void Rasterizer::Blend(const RasterCamera& camera,
           t = next_t;
           last = k + 1;
         }
+        evaluations += last - begin;
         const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
         out->rgb[3 * pixel] = cr + t * settings.background.x();
         out->rgb[3 * pixel + 1] = cg + t * settings.background.y();
@@ -231,6 +233,7 @@ void Rasterizer::Blend(const RasterCamera& camera,
       }
     }
   }
+  stats_.pixel_evaluations = evaluations;
 }
 
 void Rasterizer::Forward(const GaussianModel& model, const RasterCamera& camera,
@@ -244,6 +247,10 @@ void Rasterizer::Forward(const GaussianModel& model, const RasterCamera& camera,
   }
   Project(model, camera);
   Bin(camera);
+  stats_.visible = static_cast<std::uint64_t>(
+      std::count_if(projected_.radius.begin(), projected_.radius.end(),
+                    [](int r) { return r > 0; }));
+  stats_.tile_entries = ids_.size();
   Blend(camera, settings, out);
 }
 

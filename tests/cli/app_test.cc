@@ -66,7 +66,7 @@ TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
     EXPECT_EQ(Lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("not built yet"), std::string::npos) << r.err;
   }
-  for (const char* name : {"render", "stability", "budget"}) {
+  for (const char* name : {"stability", "budget"}) {
     EXPECT_EQ(RunCli({"bench", name}).status, kExitNotBuilt) << name;
   }
 }
