@@ -28,6 +28,10 @@ inline constexpr float kMinTransmittance = 1e-4f;
 // A quaternion shorter than this is treated as the identity rotation
 // instead of dividing by (almost) zero.
 inline constexpr float kMinQuaternionNorm = 1e-12f;
+// Margin (pixels) added to the alpha >= kMinAlpha box against rounding: a
+// pixel just outside the exact box must not be the one the alpha test
+// would have accepted.
+inline constexpr float kAlphaBoxMargin = 0.01f;
 // Footprint radii are clamped here (pixels) so that enormous Gaussians do
 // not overflow the integer tile arithmetic; the tile range clamps anyway.
 inline constexpr float kMaxRadius = 1e6f;
@@ -59,6 +63,10 @@ struct ProjectedGaussians {
   std::vector<float> opacity;  // sigmoid of the logit
   std::vector<float> r, g, b;  // view-dependent colour
   std::vector<int> radius;     // 3 sigma, pixels; 0 = culled
+  // Half-size of the box holding every pixel where alpha >= kMinAlpha: the
+  // blend loop visits only those pixels of each tile (the others would be
+  // skipped by the alpha test anyway, so results are unchanged).
+  std::vector<float> extent_x, extent_y;
   std::vector<int> tile_x0, tile_y0, tile_x1,
       tile_y1;                        // tiles touched, [x0, x1)
   std::vector<std::uint8_t> clamped;  // N x 3: SH colour hit max(0, .)
@@ -98,8 +106,8 @@ class Rasterizer {
   ProjectedGaussians projected_;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint32_t> ids_;
-  std::vector<std::uint32_t> order_;    // sort permutation
-  std::vector<std::uint32_t> scratch_;  // ids being permuted
+  std::vector<std::uint64_t> key_scratch_;  // radix sort buffers
+  std::vector<std::uint32_t> scratch_;      // ids being permuted
   std::vector<std::uint32_t> offsets_;
   std::vector<std::uint32_t> ranges_;
   std::vector<float> final_t_;

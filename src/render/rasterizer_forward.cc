@@ -13,8 +13,8 @@
 namespace pano4d {
 
 void ProjectedGaussians::Resize(std::size_t n) {
-  for (auto* v :
-       {&x, &y, &depth, &conic_a, &conic_b, &conic_c, &opacity, &r, &g, &b})
+  for (auto* v : {&x, &y, &depth, &conic_a, &conic_b, &conic_c, &opacity, &r,
+                  &g, &b, &extent_x, &extent_y})
     v->resize(n);
   for (auto* v : {&radius, &tile_x0, &tile_y0, &tile_x1, &tile_y1})
     v->resize(n);
@@ -68,6 +68,15 @@ void Rasterizer::Project(const GaussianModel& model,
     const float det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
     if (!(det > 0) || !std::isfinite(det)) continue;
 
+    // A Gaussian below kMinAlpha everywhere never contributes.
+    const float opacity = 1.0f / (1.0f + std::exp(-model.opacities[i]));
+    if (!(opacity >= kMinAlpha)) continue;
+    // alpha >= kMinAlpha <=> d^T conic d <= 2 ln(opacity / kMinAlpha): the
+    // bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
+    // cov_yy).
+    const float k = 2.0f * std::log(opacity / kMinAlpha);
+    const float extent_x = std::sqrt(k * cov(0, 0)) + kAlphaBoxMargin;
+    const float extent_y = std::sqrt(k * cov(1, 1)) + kAlphaBoxMargin;
     const float mid = 0.5f * (cov(0, 0) + cov(1, 1));
     const float lambda = mid + std::sqrt(std::max(0.1f, mid * mid - det));
     const float radius =
@@ -93,7 +102,9 @@ void Rasterizer::Project(const GaussianModel& model,
     p.conic_a[i] = cov(1, 1) / det;
     p.conic_b[i] = -cov(0, 1) / det;
     p.conic_c[i] = cov(0, 0) / det;
-    p.opacity[i] = 1.0f / (1.0f + std::exp(-model.opacities[i]));
+    p.opacity[i] = opacity;
+    p.extent_x[i] = extent_x;
+    p.extent_y[i] = extent_y;
     bool clamped[3];
     const Eigen::Vector3f color =
         ShColor(model.sh_degree,
@@ -153,25 +164,36 @@ void Rasterizer::Bin(const RasterCamera& camera) {
       }
     }
   }
-  order_.resize(total);
-  for (std::uint32_t k = 0; k < total; ++k) order_[k] = k;
-  std::sort(
-      order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return keys_[a] != keys_[b] ? keys_[a] < keys_[b] : ids_[a] < ids_[b];
-      });
-  // Apply the permutation (ids only; tile ranges come from the sorted keys).
+  // LSD radix sort of the (key, id) pairs on the key, 8 bits a pass, over
+  // the bits the keys use (32 of depth, then the tile). Radix sort is
+  // stable and the entries were written in Gaussian order, so equal keys
+  // keep index order: the order is total, as the blend and its backward
+  // need.
+  const std::uint64_t tiles = static_cast<std::uint64_t>(tiles_x) * tiles_y;
+  int key_bits = 32;
+  while ((std::uint64_t{1} << (key_bits - 32)) < tiles) ++key_bits;
+  key_scratch_.resize(total);
   scratch_.resize(total);
-  for (std::uint32_t k = 0; k < total; ++k) scratch_[k] = ids_[order_[k]];
-  ranges_.assign(2 * static_cast<std::size_t>(tiles_x) * tiles_y, 0);
+  for (int shift = 0; shift < key_bits; shift += 8) {
+    std::uint32_t count[257] = {};
+    for (std::uint32_t k = 0; k < total; ++k)
+      ++count[((keys_[k] >> shift) & 0xff) + 1];
+    for (int d = 0; d < 256; ++d) count[d + 1] += count[d];
+    for (std::uint32_t k = 0; k < total; ++k) {
+      const std::uint32_t slot = count[(keys_[k] >> shift) & 0xff]++;
+      key_scratch_[slot] = keys_[k];
+      scratch_[slot] = ids_[k];
+    }
+    keys_.swap(key_scratch_);
+    ids_.swap(scratch_);
+  }
+  ranges_.assign(2 * tiles, 0);
   for (std::uint32_t k = 0; k < total; ++k) {
-    const std::uint32_t tile =
-        static_cast<std::uint32_t>(keys_[order_[k]] >> 32);
-    if (k == 0 ||
-        static_cast<std::uint32_t>(keys_[order_[k - 1]] >> 32) != tile)
+    const std::uint32_t tile = static_cast<std::uint32_t>(keys_[k] >> 32);
+    if (k == 0 || static_cast<std::uint32_t>(keys_[k - 1] >> 32) != tile)
       ranges_[2 * tile] = k;
     ranges_[2 * tile + 1] = k + 1;
   }
-  ids_.swap(scratch_);
 }
 
 void Rasterizer::Blend(const RasterCamera& camera,
@@ -179,57 +201,96 @@ void Rasterizer::Blend(const RasterCamera& camera,
   const int width = camera.width, height = camera.height;
   const int tiles_x = (width + kTileSize - 1) / kTileSize;
   const int tiles_y = (height + kTileSize - 1) / kTileSize;
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
   out->width = width;
   out->height = height;
-  out->rgb.resize(static_cast<std::size_t>(width) * height * 3);
-  out->depth.resize(static_cast<std::size_t>(width) * height);
-  out->alpha.resize(static_cast<std::size_t>(width) * height);
-  final_t_.resize(static_cast<std::size_t>(width) * height);
-  last_.resize(static_cast<std::size_t>(width) * height);
+  out->rgb.resize(3 * pixels);
+  out->depth.resize(pixels);
+  out->alpha.resize(pixels);
+  final_t_.resize(pixels);
+  last_.resize(pixels);
   const ProjectedGaussians& p = projected_;
-
   std::uint64_t evaluations = 0;
+
+  // Gaussian-major within a tile: each Gaussian, front to back, updates the
+  // pixels of its alpha >= kMinAlpha box. Every pixel still sees its
+  // Gaussians in depth order and stops once transmittance would drop below
+  // kMinTransmittance, exactly as a pixel-major loop, but the pixels a
+  // Gaussian cannot reach are never visited.
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
+    constexpr int kTilePixels = kTileSize * kTileSize;
+    float t[kTilePixels], cr[kTilePixels], cg[kTilePixels], cb[kTilePixels],
+        cd[kTilePixels];
+    std::uint32_t last[kTilePixels];
+    bool done[kTilePixels];
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
     const int x_begin = (tile % tiles_x) * kTileSize,
               y_begin = (tile / tiles_x) * kTileSize;
-    for (int py = y_begin; py < std::min(y_begin + kTileSize, height); ++py) {
-      for (int px = x_begin; px < std::min(x_begin + kTileSize, width); ++px) {
-        // Pixel centres at +0.5, as the camera model.
-        const float fx = px + 0.5f, fy = py + 0.5f;
-        float t = 1.0f, cr = 0, cg = 0, cb = 0, cd = 0;
-        std::uint32_t last = begin;
-        for (std::uint32_t k = begin; k < end; ++k) {
-          const std::uint32_t g = ids_[k];
-          const float dx = fx - p.x[g], dy = fy - p.y[g];
-          const float power =
-              -0.5f * (p.conic_a[g] * dx * dx + p.conic_c[g] * dy * dy) -
-              p.conic_b[g] * dx * dy;
+    const int x_end = std::min(x_begin + kTileSize, width),
+              y_end = std::min(y_begin + kTileSize, height);
+    int alive = (x_end - x_begin) * (y_end - y_begin);
+    for (int i = 0; i < kTilePixels; ++i) {
+      t[i] = 1.0f;
+      cr[i] = cg[i] = cb[i] = cd[i] = 0.0f;
+      last[i] = begin;
+      done[i] = false;
+    }
+    for (std::uint32_t k = begin; k < end && alive > 0; ++k) {
+      const std::uint32_t g = ids_[k];
+      const float gx = p.x[g], gy = p.y[g];
+      // Pixels whose centre (px + 0.5) lies within the extent.
+      const int px0 = std::max(
+          x_begin, static_cast<int>(std::ceil(gx - p.extent_x[g] - 0.5f)));
+      const int px1 = std::min(
+          x_end - 1, static_cast<int>(std::floor(gx + p.extent_x[g] - 0.5f)));
+      const int py0 = std::max(
+          y_begin, static_cast<int>(std::ceil(gy - p.extent_y[g] - 0.5f)));
+      const int py1 = std::min(
+          y_end - 1, static_cast<int>(std::floor(gy + p.extent_y[g] - 0.5f)));
+      const float ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
+                  op = p.opacity[g];
+      const float red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
+      for (int py = py0; py <= py1; ++py) {
+        const float dy = py + 0.5f - gy;
+        const float row = -0.5f * cc * dy * dy;
+        for (int px = px0; px <= px1; ++px) {
+          const int i = (py - y_begin) * kTileSize + (px - x_begin);
+          if (done[i]) continue;
+          ++evaluations;
+          const float dx = px + 0.5f - gx;
+          const float power = row - dx * (0.5f * ca * dx + cbb * dy);
           if (power > 0) continue;  // rounding outside the ellipse's domain
-          const float alpha =
-              std::min(kMaxAlpha, p.opacity[g] * std::exp(power));
+          const float alpha = std::min(kMaxAlpha, op * std::exp(power));
           if (alpha < kMinAlpha) continue;
-          const float next_t = t * (1 - alpha);
-          if (next_t < kMinTransmittance) break;
-          const float w = alpha * t;
-          cr += w * p.r[g];
-          cg += w * p.g[g];
-          cb += w * p.b[g];
-          cd += w * p.depth[g];
-          t = next_t;
-          last = k + 1;
+          const float next_t = t[i] * (1 - alpha);
+          if (next_t < kMinTransmittance) {
+            done[i] = true;
+            --alive;
+            continue;
+          }
+          const float w = alpha * t[i];
+          cr[i] += w * red;
+          cg[i] += w * green;
+          cb[i] += w * blue;
+          cd[i] += w * z;
+          t[i] = next_t;
+          last[i] = k + 1;
         }
-        evaluations += last - begin;
+      }
+    }
+    for (int py = y_begin; py < y_end; ++py) {
+      for (int px = x_begin; px < x_end; ++px) {
+        const int i = (py - y_begin) * kTileSize + (px - x_begin);
         const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
-        out->rgb[3 * pixel] = cr + t * settings.background.x();
-        out->rgb[3 * pixel + 1] = cg + t * settings.background.y();
-        out->rgb[3 * pixel + 2] = cb + t * settings.background.z();
-        const float alpha = 1 - t;
+        out->rgb[3 * pixel] = cr[i] + t[i] * settings.background.x();
+        out->rgb[3 * pixel + 1] = cg[i] + t[i] * settings.background.y();
+        out->rgb[3 * pixel + 2] = cb[i] + t[i] * settings.background.z();
+        const float alpha = 1 - t[i];
         out->alpha[pixel] = alpha;
-        out->depth[pixel] = alpha > kMinAlphaForDepth ? cd / alpha : 0.0f;
-        final_t_[pixel] = t;
-        last_[pixel] = last;
+        out->depth[pixel] = alpha > kMinAlphaForDepth ? cd[i] / alpha : 0.0f;
+        final_t_[pixel] = t[i];
+        last_[pixel] = last[i];
       }
     }
   }
