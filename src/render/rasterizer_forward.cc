@@ -251,10 +251,24 @@ void Rasterizer::Blend(const RasterCamera& camera,
       const float ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
                   op = p.opacity[g];
       const float red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
+      // q = a dx^2 + 2 b dx dy + c dy^2 <= kq is where alpha >= kMinAlpha
+      // (kq slightly inflated against rounding); per row, that is an
+      // interval of dx: the roots of the quadratic.
+      const float kq = 2.0f * std::log(op / kMinAlpha) * (1 + 1e-4f) + 1e-4f;
       for (int py = py0; py <= py1; ++py) {
         const float dy = py + 0.5f - gy;
         const float row = -0.5f * cc * dy * dy;
-        for (int px = px0; px <= px1; ++px) {
+        const float half_b = cbb * dy;
+        const float discriminant = half_b * half_b - ca * (cc * dy * dy - kq);
+        if (!(discriminant >= 0)) continue;
+        const float root = std::sqrt(discriminant);
+        const int rx0 = std::max(
+            px0, static_cast<int>(std::ceil(gx + (-half_b - root) / ca - 0.5f -
+                                            kAlphaBoxMargin)));
+        const int rx1 = std::min(
+            px1, static_cast<int>(std::floor(gx + (-half_b + root) / ca - 0.5f +
+                                             kAlphaBoxMargin)));
+        for (int px = rx0; px <= rx1; ++px) {
           const int i = (py - y_begin) * kTileSize + (px - x_begin);
           if (done[i]) continue;
           ++evaluations;
