@@ -4,7 +4,8 @@
 
 namespace pano4d {
 
-void GaussianModel::Resize(std::size_t n) {
+template <typename T>
+void GaussianModelT<T>::Resize(std::size_t n) {
   means.resize(3 * n);
   log_scales.resize(3 * n);
   quats.resize(4 * n);
@@ -12,13 +13,14 @@ void GaussianModel::Resize(std::size_t n) {
   sh.resize(n * sh_coefficients() * 3);
 }
 
-void GaussianModel::Check() const {
+template <typename T>
+void GaussianModelT<T>::Check() const {
   if (sh_degree < 0 || sh_degree > 3) {
     throw Error("gaussians", "sh_degree", std::to_string(sh_degree),
                 "must be 0..3");
   }
   const std::size_t n = size();
-  const auto expect = [&](const std::vector<float>& v, std::size_t per,
+  const auto expect = [&](const std::vector<T>& v, std::size_t per,
                           const char* name) {
     if (v.size() != n * per) {
       throw Error("gaussians", name, std::to_string(v.size()) + " values",
@@ -32,23 +34,29 @@ void GaussianModel::Check() const {
   expect(sh, static_cast<std::size_t>(sh_coefficients()) * 3, "sh");
 }
 
-RasterCamera RasterCamera::FromPosed(const PosedCamera& posed) {
+template <typename T>
+RasterCameraT<T> RasterCameraT<T>::FromPosed(const PosedCamera& posed) {
   const Camera& c = posed.camera;
   if (c.HasDistortion()) {
     throw Error(
         "camera", "model", std::string(c.info().name),
         "the rasterizer takes pinhole cameras; undistort the images first");
   }
-  RasterCamera out;
+  RasterCameraT out;
   out.width = c.width;
   out.height = c.height;
-  out.fx = static_cast<float>(c.focal_x());
-  out.fy = static_cast<float>(c.focal_y());
-  out.cx = static_cast<float>(c.principal_x());
-  out.cy = static_cast<float>(c.principal_y());
-  out.rotation = posed.cam_from_world.rotation.toRotationMatrix().cast<float>();
-  out.translation = posed.cam_from_world.translation.cast<float>();
+  out.fx = static_cast<T>(c.focal_x());
+  out.fy = static_cast<T>(c.focal_y());
+  out.cx = static_cast<T>(c.principal_x());
+  out.cy = static_cast<T>(c.principal_y());
+  out.rotation = posed.cam_from_world.rotation.toRotationMatrix().cast<T>();
+  out.translation = posed.cam_from_world.translation.cast<T>();
   return out;
 }
+
+template struct GaussianModelT<float>;
+template struct GaussianModelT<double>;
+template struct RasterCameraT<float>;
+template struct RasterCameraT<double>;
 
 }  // namespace pano4d

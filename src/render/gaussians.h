@@ -17,13 +17,14 @@ namespace pano4d {
 //   opacities    N, logits (opacity = sigmoid)
 //   sh           N x K x 3, K = (sh_degree + 1)^2 coefficients per channel,
 //                coefficient-major: sh[(n K + k) 3 + c]
-struct GaussianModel {
+template <typename T>
+struct GaussianModelT {
   int sh_degree = 0;  // 0..3
-  std::vector<float> means;
-  std::vector<float> log_scales;
-  std::vector<float> quats;
-  std::vector<float> opacities;
-  std::vector<float> sh;
+  std::vector<T> means;
+  std::vector<T> log_scales;
+  std::vector<T> quats;
+  std::vector<T> opacities;
+  std::vector<T> sh;
 
   std::size_t size() const { return opacities.size(); }
   int sh_coefficients() const { return (sh_degree + 1) * (sh_degree + 1); }
@@ -35,18 +36,24 @@ struct GaussianModel {
 
 // A pinhole camera as the rasterizer uses it (distortion is removed
 // upstream, e.g. by COLMAP's image_undistorter).
-struct RasterCamera {
+template <typename T>
+struct RasterCameraT {
   int width = 0;
   int height = 0;
-  float fx = 1, fy = 1, cx = 0, cy = 0;
-  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  // cam_from_world
-  Eigen::Vector3f translation = Eigen::Vector3f::Zero();
+  T fx = 1, fy = 1, cx = 0, cy = 0;
+  Eigen::Matrix<T, 3, 3> rotation =
+      Eigen::Matrix<T, 3, 3>::Identity();  // cam_from_world
+  Eigen::Matrix<T, 3, 1> translation = Eigen::Matrix<T, 3, 1>::Zero();
 
   // Throws pano4d::Error for a camera with distortion.
-  static RasterCamera FromPosed(const PosedCamera& camera);
-  Eigen::Vector3f Center() const {
+  static RasterCameraT FromPosed(const PosedCamera& camera);
+  Eigen::Matrix<T, 3, 1> Center() const {
     return -(rotation.transpose() * translation);
   }
 };
+
+// float renders; double is for checking gradients by finite differences.
+using GaussianModel = GaussianModelT<float>;
+using RasterCamera = RasterCameraT<float>;
 
 }  // namespace pano4d

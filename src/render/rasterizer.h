@@ -40,33 +40,36 @@ inline constexpr float kMaxRadius = 1e6f;
 inline constexpr float kMinAlphaForDepth = 1e-6f;
 inline constexpr int kTileSize = 16;
 
-struct RasterSettings {
-  Eigen::Vector3f background = Eigen::Vector3f::Zero();
+template <typename T>
+struct RasterSettingsT {
+  Eigen::Matrix<T, 3, 1> background = Eigen::Matrix<T, 3, 1>::Zero();
 };
 
 // What a forward pass produces: row-major images.
-struct RenderOutput {
+template <typename T>
+struct RenderOutputT {
   int width = 0;
   int height = 0;
-  std::vector<float> rgb;    // H x W x 3, background composited
-  std::vector<float> depth;  // H x W, expected z-depth (0 where alpha ~ 0)
-  std::vector<float> alpha;  // H x W, accumulated opacity
+  std::vector<T> rgb;    // H x W x 3, background composited
+  std::vector<T> depth;  // H x W, expected z-depth (0 where alpha ~ 0)
+  std::vector<T> alpha;  // H x W, accumulated opacity
 };
 
 // The per-Gaussian result of projection, structure of arrays. A culled
 // Gaussian has radius 0.
-struct ProjectedGaussians {
-  std::vector<float> x, y;   // pixel position of the mean
-  std::vector<float> depth;  // camera z
-  std::vector<float> conic_a, conic_b,
-      conic_c;                 // inverse 2D covariance [a b; b c]
-  std::vector<float> opacity;  // sigmoid of the logit
-  std::vector<float> r, g, b;  // view-dependent colour
-  std::vector<int> radius;     // 3 sigma, pixels; 0 = culled
+template <typename T>
+struct ProjectedGaussiansT {
+  std::vector<T> x, y;   // pixel position of the mean
+  std::vector<T> depth;  // camera z
+  std::vector<T> conic_a, conic_b,
+      conic_c;              // inverse 2D covariance [a b; b c]
+  std::vector<T> opacity;   // sigmoid of the logit
+  std::vector<T> r, g, b;   // view-dependent colour
+  std::vector<int> radius;  // 3 sigma, pixels; 0 = culled
   // Half-size of the box holding every pixel where alpha >= kMinAlpha: the
   // blend loop visits only those pixels of each tile (the others would be
   // skipped by the alpha test anyway, so results are unchanged).
-  std::vector<float> extent_x, extent_y;
+  std::vector<T> extent_x, extent_y;
   std::vector<int> tile_x0, tile_y0, tile_x1,
       tile_y1;                        // tiles touched, [x0, x1)
   std::vector<std::uint8_t> clamped;  // N x 3: SH colour hit max(0, .)
@@ -83,14 +86,15 @@ struct RasterStats {
 // A tiled CPU rasterizer. Buffers live in the object and are reused, so
 // steady-state rendering does not allocate. Results do not depend on the
 // number of threads: tiles are independent and the sort is total.
-class Rasterizer {
+template <typename T>
+class RasterizerT {
  public:
-  void Forward(const GaussianModel& model, const RasterCamera& camera,
-               const RasterSettings& settings, RenderOutput* out);
+  void Forward(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
+               const RasterSettingsT<T>& settings, RenderOutputT<T>* out);
 
   // Forward state kept for the backward pass.
-  const ProjectedGaussians& projected() const { return projected_; }
-  const std::vector<float>& final_transmittance() const { return final_t_; }
+  const ProjectedGaussiansT<T>& projected() const { return projected_; }
+  const std::vector<T>& final_transmittance() const { return final_t_; }
   const std::vector<std::uint32_t>& last_contributor() const { return last_; }
   const std::vector<std::uint32_t>& sorted_ids() const { return ids_; }
   // [begin, end) into sorted_ids() for each tile.
@@ -98,21 +102,26 @@ class Rasterizer {
   const RasterStats& stats() const { return stats_; }
 
  private:
-  void Project(const GaussianModel& model, const RasterCamera& camera);
-  void Bin(const RasterCamera& camera);
-  void Blend(const RasterCamera& camera, const RasterSettings& settings,
-             RenderOutput* out);
+  void Project(const GaussianModelT<T>& model, const RasterCameraT<T>& camera);
+  void Bin(const RasterCameraT<T>& camera);
+  void Blend(const RasterCameraT<T>& camera, const RasterSettingsT<T>& settings,
+             RenderOutputT<T>* out);
 
-  ProjectedGaussians projected_;
+  ProjectedGaussiansT<T> projected_;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint32_t> ids_;
   std::vector<std::uint64_t> key_scratch_;  // radix sort buffers
   std::vector<std::uint32_t> scratch_;      // ids being permuted
   std::vector<std::uint32_t> offsets_;
   std::vector<std::uint32_t> ranges_;
-  std::vector<float> final_t_;
+  std::vector<T> final_t_;
   std::vector<std::uint32_t> last_;
   RasterStats stats_;
 };
+
+using RasterSettings = RasterSettingsT<float>;
+using RenderOutput = RenderOutputT<float>;
+using ProjectedGaussians = ProjectedGaussiansT<float>;
+using Rasterizer = RasterizerT<float>;
 
 }  // namespace pano4d

@@ -12,7 +12,8 @@
 
 namespace pano4d {
 
-void ProjectedGaussians::Resize(std::size_t n) {
+template <typename T>
+void ProjectedGaussiansT<T>::Resize(std::size_t n) {
   for (auto* v : {&x, &y, &depth, &conic_a, &conic_b, &conic_c, &opacity, &r,
                   &g, &b, &extent_x, &extent_y})
     v->resize(n);
@@ -21,74 +22,77 @@ void ProjectedGaussians::Resize(std::size_t n) {
   clamped.resize(3 * n);
 }
 
-void Rasterizer::Project(const GaussianModel& model,
-                         const RasterCamera& camera) {
+template <typename T>
+void RasterizerT<T>::Project(const GaussianModelT<T>& model,
+                             const RasterCameraT<T>& camera) {
   const std::size_t n = model.size();
   projected_.Resize(n);
   const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
   const int tiles_y = (camera.height + kTileSize - 1) / kTileSize;
-  const float lim_x = kFovClamp * 0.5f * camera.width / camera.fx;
-  const float lim_y = kFovClamp * 0.5f * camera.height / camera.fy;
-  const Eigen::Vector3f center = camera.Center();
+  const T lim_x = T(kFovClamp) * T(0.5) * camera.width / camera.fx;
+  const T lim_y = T(kFovClamp) * T(0.5) * camera.height / camera.fy;
+  const Eigen::Matrix<T, 3, 1> center = camera.Center();
   const int k_count = model.sh_coefficients();
-  ProjectedGaussians& p = projected_;
+  ProjectedGaussiansT<T>& p = projected_;
 
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
     p.radius[i] = 0;
-    const Eigen::Vector3f mean(model.means[3 * i], model.means[3 * i + 1],
-                               model.means[3 * i + 2]);
-    const Eigen::Vector3f t = camera.rotation * mean + camera.translation;
-    if (!(t.z() > kNearPlane) || !t.allFinite()) continue;
+    const Eigen::Matrix<T, 3, 1> mean(
+        model.means[3 * i], model.means[3 * i + 1], model.means[3 * i + 2]);
+    const Eigen::Matrix<T, 3, 1> t =
+        camera.rotation * mean + camera.translation;
+    if (!(t.z() > T(kNearPlane)) || !t.allFinite()) continue;
 
     // 3D covariance R S S^T R^T from the normalised quaternion and scales.
-    Eigen::Vector4f q(model.quats[4 * i], model.quats[4 * i + 1],
-                      model.quats[4 * i + 2], model.quats[4 * i + 3]);
-    const float q_norm = q.norm();
-    q = q_norm > kMinQuaternionNorm ? Eigen::Vector4f(q / q_norm)
-                                    : Eigen::Vector4f(1, 0, 0, 0);
-    const Eigen::Matrix3f rot =
-        Eigen::Quaternionf(q(0), q(1), q(2), q(3)).toRotationMatrix();
-    const Eigen::Vector3f scale(std::exp(model.log_scales[3 * i]),
-                                std::exp(model.log_scales[3 * i + 1]),
-                                std::exp(model.log_scales[3 * i + 2]));
-    const Eigen::Matrix3f m = rot * scale.asDiagonal();
-    const Eigen::Matrix3f sigma = m * m.transpose();
+    Eigen::Matrix<T, 4, 1> q(model.quats[4 * i], model.quats[4 * i + 1],
+                             model.quats[4 * i + 2], model.quats[4 * i + 3]);
+    const T q_norm = q.norm();
+    q = q_norm > T(kMinQuaternionNorm) ? Eigen::Matrix<T, 4, 1>(q / q_norm)
+                                       : Eigen::Matrix<T, 4, 1>(1, 0, 0, 0);
+    const Eigen::Matrix<T, 3, 3> rot =
+        Eigen::Quaternion<T>(q(0), q(1), q(2), q(3)).toRotationMatrix();
+    const Eigen::Matrix<T, 3, 1> scale(std::exp(model.log_scales[3 * i]),
+                                       std::exp(model.log_scales[3 * i + 1]),
+                                       std::exp(model.log_scales[3 * i + 2]));
+    const Eigen::Matrix<T, 3, 3> m = rot * scale.asDiagonal();
+    const Eigen::Matrix<T, 3, 3> sigma = m * m.transpose();
 
     // EWA: J W Sigma W^T J^T with the point clamped to kFovClamp x FOV.
-    const float inv_z = 1.0f / t.z();
-    const float tx = std::clamp(t.x() * inv_z, -lim_x, lim_x) * t.z();
-    const float ty = std::clamp(t.y() * inv_z, -lim_y, lim_y) * t.z();
-    Eigen::Matrix<float, 2, 3> j;
+    const T inv_z = T(1.0) / t.z();
+    const T tx = std::clamp(t.x() * inv_z, -lim_x, lim_x) * t.z();
+    const T ty = std::clamp(t.y() * inv_z, -lim_y, lim_y) * t.z();
+    Eigen::Matrix<T, 2, 3> j;
     j << camera.fx * inv_z, 0, -camera.fx * tx * inv_z * inv_z,  //
         0, camera.fy * inv_z, -camera.fy * ty * inv_z * inv_z;
-    const Eigen::Matrix<float, 2, 3> jw = j * camera.rotation;
-    const Eigen::Matrix2f cov =
-        jw * sigma * jw.transpose() + kLowPass * Eigen::Matrix2f::Identity();
-    const float det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
+    const Eigen::Matrix<T, 2, 3> jw = j * camera.rotation;
+    const Eigen::Matrix<T, 2, 2> cov =
+        jw * sigma * jw.transpose() +
+        T(kLowPass) * Eigen::Matrix<T, 2, 2>::Identity();
+    const T det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
     if (!(det > 0) || !std::isfinite(det)) continue;
 
     // A Gaussian below kMinAlpha everywhere never contributes.
-    const float opacity = 1.0f / (1.0f + std::exp(-model.opacities[i]));
-    if (!(opacity >= kMinAlpha)) continue;
-    // alpha >= kMinAlpha <=> d^T conic d <= 2 ln(opacity / kMinAlpha): the
-    // bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
+    const T opacity = T(1.0) / (T(1.0) + std::exp(-model.opacities[i]));
+    if (!(opacity >= T(kMinAlpha))) continue;
+    // alpha >= kMinAlpha <=> d^T conic d <= 2 ln(opacity / kMinAlpha):
+    // the bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
     // cov_yy).
-    const float k = 2.0f * std::log(opacity / kMinAlpha);
-    const float extent_x = std::sqrt(k * cov(0, 0)) + kAlphaBoxMargin;
-    const float extent_y = std::sqrt(k * cov(1, 1)) + kAlphaBoxMargin;
-    const float mid = 0.5f * (cov(0, 0) + cov(1, 1));
-    const float lambda = mid + std::sqrt(std::max(0.1f, mid * mid - det));
-    const float radius =
-        std::min(kMaxRadius, std::ceil(3.0f * std::sqrt(lambda)));
-    const float px = camera.fx * t.x() * inv_z + camera.cx;
-    const float py = camera.fy * t.y() * inv_z + camera.cy;
+    const T k = T(2.0) * std::log(opacity / T(kMinAlpha));
+    const T extent_x = std::sqrt(k * cov(0, 0)) + T(kAlphaBoxMargin);
+    const T extent_y = std::sqrt(k * cov(1, 1)) + T(kAlphaBoxMargin);
+    const T mid = T(0.5) * (cov(0, 0) + cov(1, 1));
+    const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
+    const T radius =
+        std::min(T(kMaxRadius), std::ceil(T(3.0) * std::sqrt(lambda)));
+    const T px = camera.fx * t.x() * inv_z + camera.cx;
+    const T py = camera.fy * t.y() * inv_z + camera.cy;
     if (!std::isfinite(radius) || !std::isfinite(px) || !std::isfinite(py))
       continue;
     // Tiles touched by the 3-sigma square around the mean, [x0, x1).
-    const auto tile = [](float v, int tiles) {
+    const auto tile = [](T v, int tiles) {
       return static_cast<int>(
-          std::clamp(v / kTileSize, 0.0f, static_cast<float>(tiles)));
+          std::clamp(v / kTileSize, T(0.0), static_cast<T>(tiles)));
     };
     const int x0 = tile(px - radius, tiles_x),
               x1 = tile(px + radius + kTileSize - 1, tiles_x);
@@ -106,7 +110,7 @@ void Rasterizer::Project(const GaussianModel& model,
     p.extent_x[i] = extent_x;
     p.extent_y[i] = extent_y;
     bool clamped[3];
-    const Eigen::Vector3f color =
+    const Eigen::Matrix<T, 3, 1> color =
         ShColor(model.sh_degree,
                 model.sh.data() + static_cast<std::size_t>(i) * k_count * 3,
                 (mean - center).normalized(), clamped);
@@ -122,11 +126,12 @@ void Rasterizer::Project(const GaussianModel& model,
   }
 }
 
-void Rasterizer::Bin(const RasterCamera& camera) {
+template <typename T>
+void RasterizerT<T>::Bin(const RasterCameraT<T>& camera) {
   const std::size_t n = projected_.radius.size();
   const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
   const int tiles_y = (camera.height + kTileSize - 1) / kTileSize;
-  const ProjectedGaussians& p = projected_;
+  const ProjectedGaussiansT<T>& p = projected_;
 
   offsets_.resize(n + 1);
   offsets_[0] = 0;
@@ -146,14 +151,16 @@ void Rasterizer::Bin(const RasterCamera& camera) {
   const std::uint32_t total = offsets_[n];
   keys_.resize(total);
   ids_.resize(total);
-  // Key: tile in the high 32 bits, the depth's float bits (monotonic for
+  // Key: tile in the high 32 bits, the depth's T bits (monotonic for
   // positive floats) in the low 32; the Gaussian index breaks ties, so the
   // order is total and the same whatever the threads.
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
     if (p.radius[i] == 0) continue;
+    // The float's bits, whatever T is: the key has 32 bits for depth.
+    const float depth = static_cast<float>(p.depth[i]);
     std::uint32_t depth_bits;
-    std::memcpy(&depth_bits, &p.depth[i], sizeof(depth_bits));
+    std::memcpy(&depth_bits, &depth, sizeof(depth_bits));
     std::uint32_t k = offsets_[i];
     for (int ty = p.tile_y0[i]; ty < p.tile_y1[i]; ++ty) {
       for (int tx = p.tile_x0[i]; tx < p.tile_x1[i]; ++tx) {
@@ -196,8 +203,10 @@ void Rasterizer::Bin(const RasterCamera& camera) {
   }
 }
 
-void Rasterizer::Blend(const RasterCamera& camera,
-                       const RasterSettings& settings, RenderOutput* out) {
+template <typename T>
+void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
+                           const RasterSettingsT<T>& settings,
+                           RenderOutputT<T>* out) {
   const int width = camera.width, height = camera.height;
   const int tiles_x = (width + kTileSize - 1) / kTileSize;
   const int tiles_y = (height + kTileSize - 1) / kTileSize;
@@ -209,7 +218,7 @@ void Rasterizer::Blend(const RasterCamera& camera,
   out->alpha.resize(pixels);
   final_t_.resize(pixels);
   last_.resize(pixels);
-  const ProjectedGaussians& p = projected_;
+  const ProjectedGaussiansT<T>& p = projected_;
   std::uint64_t evaluations = 0;
 
   // Gaussian-major within a tile: each Gaussian, front to back, updates the
@@ -220,7 +229,7 @@ void Rasterizer::Blend(const RasterCamera& camera,
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     constexpr int kTilePixels = kTileSize * kTileSize;
-    float t[kTilePixels], cr[kTilePixels], cg[kTilePixels], cb[kTilePixels],
+    T t[kTilePixels], cr[kTilePixels], cg[kTilePixels], cb[kTilePixels],
         cd[kTilePixels];
     std::uint32_t last[kTilePixels];
     bool done[kTilePixels];
@@ -231,59 +240,59 @@ void Rasterizer::Blend(const RasterCamera& camera,
               y_end = std::min(y_begin + kTileSize, height);
     int alive = (x_end - x_begin) * (y_end - y_begin);
     for (int i = 0; i < kTilePixels; ++i) {
-      t[i] = 1.0f;
-      cr[i] = cg[i] = cb[i] = cd[i] = 0.0f;
+      t[i] = T(1.0);
+      cr[i] = cg[i] = cb[i] = cd[i] = T(0.0);
       last[i] = begin;
       done[i] = false;
     }
     for (std::uint32_t k = begin; k < end && alive > 0; ++k) {
       const std::uint32_t g = ids_[k];
-      const float gx = p.x[g], gy = p.y[g];
+      const T gx = p.x[g], gy = p.y[g];
       // Pixels whose centre (px + 0.5) lies within the extent.
       const int px0 = std::max(
-          x_begin, static_cast<int>(std::ceil(gx - p.extent_x[g] - 0.5f)));
+          x_begin, static_cast<int>(std::ceil(gx - p.extent_x[g] - T(0.5))));
       const int px1 = std::min(
-          x_end - 1, static_cast<int>(std::floor(gx + p.extent_x[g] - 0.5f)));
+          x_end - 1, static_cast<int>(std::floor(gx + p.extent_x[g] - T(0.5))));
       const int py0 = std::max(
-          y_begin, static_cast<int>(std::ceil(gy - p.extent_y[g] - 0.5f)));
+          y_begin, static_cast<int>(std::ceil(gy - p.extent_y[g] - T(0.5))));
       const int py1 = std::min(
-          y_end - 1, static_cast<int>(std::floor(gy + p.extent_y[g] - 0.5f)));
-      const float ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
-                  op = p.opacity[g];
-      const float red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
+          y_end - 1, static_cast<int>(std::floor(gy + p.extent_y[g] - T(0.5))));
+      const T ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
+              op = p.opacity[g];
+      const T red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
       // q = a dx^2 + 2 b dx dy + c dy^2 <= kq is where alpha >= kMinAlpha
       // (kq slightly inflated against rounding); per row, that is an
       // interval of dx: the roots of the quadratic.
-      const float kq = 2.0f * std::log(op / kMinAlpha) * (1 + 1e-4f) + 1e-4f;
+      const T kq = T(2.0) * std::log(op / T(kMinAlpha)) * (1 + 1e-4f) + 1e-4f;
       for (int py = py0; py <= py1; ++py) {
-        const float dy = py + 0.5f - gy;
-        const float row = -0.5f * cc * dy * dy;
-        const float half_b = cbb * dy;
-        const float discriminant = half_b * half_b - ca * (cc * dy * dy - kq);
+        const T dy = py + T(0.5) - gy;
+        const T row = -T(0.5) * cc * dy * dy;
+        const T half_b = cbb * dy;
+        const T discriminant = half_b * half_b - ca * (cc * dy * dy - kq);
         if (!(discriminant >= 0)) continue;
-        const float root = std::sqrt(discriminant);
+        const T root = std::sqrt(discriminant);
         const int rx0 = std::max(
-            px0, static_cast<int>(std::ceil(gx + (-half_b - root) / ca - 0.5f -
-                                            kAlphaBoxMargin)));
+            px0, static_cast<int>(std::ceil(gx + (-half_b - root) / ca -
+                                            T(0.5) - T(kAlphaBoxMargin))));
         const int rx1 = std::min(
-            px1, static_cast<int>(std::floor(gx + (-half_b + root) / ca - 0.5f +
-                                             kAlphaBoxMargin)));
+            px1, static_cast<int>(std::floor(gx + (-half_b + root) / ca -
+                                             T(0.5) + T(kAlphaBoxMargin))));
         for (int px = rx0; px <= rx1; ++px) {
           const int i = (py - y_begin) * kTileSize + (px - x_begin);
           if (done[i]) continue;
           ++evaluations;
-          const float dx = px + 0.5f - gx;
-          const float power = row - dx * (0.5f * ca * dx + cbb * dy);
+          const T dx = px + T(0.5) - gx;
+          const T power = row - dx * (T(0.5) * ca * dx + cbb * dy);
           if (power > 0) continue;  // rounding outside the ellipse's domain
-          const float alpha = std::min(kMaxAlpha, op * std::exp(power));
-          if (alpha < kMinAlpha) continue;
-          const float next_t = t[i] * (1 - alpha);
-          if (next_t < kMinTransmittance) {
+          const T alpha = std::min(T(kMaxAlpha), op * std::exp(power));
+          if (alpha < T(kMinAlpha)) continue;
+          const T next_t = t[i] * (1 - alpha);
+          if (next_t < T(kMinTransmittance)) {
             done[i] = true;
             --alive;
             continue;
           }
-          const float w = alpha * t[i];
+          const T w = alpha * t[i];
           cr[i] += w * red;
           cg[i] += w * green;
           cb[i] += w * blue;
@@ -300,9 +309,10 @@ void Rasterizer::Blend(const RasterCamera& camera,
         out->rgb[3 * pixel] = cr[i] + t[i] * settings.background.x();
         out->rgb[3 * pixel + 1] = cg[i] + t[i] * settings.background.y();
         out->rgb[3 * pixel + 2] = cb[i] + t[i] * settings.background.z();
-        const float alpha = 1 - t[i];
+        const T alpha = 1 - t[i];
         out->alpha[pixel] = alpha;
-        out->depth[pixel] = alpha > kMinAlphaForDepth ? cd[i] / alpha : 0.0f;
+        out->depth[pixel] =
+            alpha > T(kMinAlphaForDepth) ? cd[i] / alpha : T(0.0);
         final_t_[pixel] = t[i];
         last_[pixel] = last[i];
       }
@@ -311,8 +321,11 @@ void Rasterizer::Blend(const RasterCamera& camera,
   stats_.pixel_evaluations = evaluations;
 }
 
-void Rasterizer::Forward(const GaussianModel& model, const RasterCamera& camera,
-                         const RasterSettings& settings, RenderOutput* out) {
+template <typename T>
+void RasterizerT<T>::Forward(const GaussianModelT<T>& model,
+                             const RasterCameraT<T>& camera,
+                             const RasterSettingsT<T>& settings,
+                             RenderOutputT<T>* out) {
   model.Check();
   if (camera.width <= 0 || camera.height <= 0) {
     throw Error(
@@ -328,5 +341,10 @@ void Rasterizer::Forward(const GaussianModel& model, const RasterCamera& camera,
   stats_.tile_entries = ids_.size();
   Blend(camera, settings, out);
 }
+
+template struct ProjectedGaussiansT<float>;
+template struct ProjectedGaussiansT<double>;
+template class RasterizerT<float>;
+template class RasterizerT<double>;
 
 }  // namespace pano4d

@@ -9,12 +9,15 @@ namespace pano4d {
 // colour = max(0, sum_k basis_k(dir) * coeff_k + 0.5), per channel.
 
 // The K = (degree + 1)^2 basis values for a unit direction.
-void ShBasis(int degree, const Eigen::Vector3f& dir, float* basis);
+template <typename T>
+void ShBasis(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* basis);
 
 // Colour from `coeffs` (K x 3, coefficient-major) seen along `dir` (unit,
 // from the camera centre to the Gaussian). `clamped` (optional, 3) records
 // which channels hit the max(0, .) clamp, for the backward pass.
-Eigen::Vector3f ShColor(int degree, const float* coeffs,
-                        const Eigen::Vector3f& dir, bool* clamped = nullptr);
+template <typename T>
+Eigen::Matrix<T, 3, 1> ShColor(int degree, const T* coeffs,
+                               const Eigen::Matrix<T, 3, 1>& dir,
+                               bool* clamped = nullptr);
 
 }  // namespace pano4d

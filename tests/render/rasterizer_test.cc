@@ -148,6 +148,43 @@ TEST(RasterizerTest, SameBytesWithOneAndTwoThreads) {
   EXPECT_TRUE(AllFinite(one));
 }
 
+// The double instantiation (for finite-difference gradient checks) renders
+// what the float one does.
+TEST(RasterizerTest, DoubleAndFloatRenderTheSameImage) {
+  const GaussianModel model = RandomScene(3000, 9);
+  GaussianModelT<double> model_d;
+  model_d.sh_degree = model.sh_degree;
+  const auto widen = [](const std::vector<float>& v) {
+    return std::vector<double>(v.begin(), v.end());
+  };
+  model_d.means = widen(model.means);
+  model_d.log_scales = widen(model.log_scales);
+  model_d.quats = widen(model.quats);
+  model_d.opacities = widen(model.opacities);
+  model_d.sh = widen(model.sh);
+  const RasterCamera camera = TestCamera();
+  RasterCameraT<double> camera_d;
+  camera_d.width = camera.width;
+  camera_d.height = camera.height;
+  camera_d.fx = camera.fx;
+  camera_d.fy = camera.fy;
+  camera_d.cx = camera.cx;
+  camera_d.cy = camera.cy;
+  RenderOutput out;
+  RenderOutputT<double> out_d;
+  Rasterizer().Forward(model, camera, {}, &out);
+  RasterizerT<double>().Forward(model_d, camera_d, {}, &out_d);
+  double worst = 0;
+  for (std::size_t i = 0; i < out.rgb.size(); ++i)
+    worst = std::max(worst, std::abs(out.rgb[i] - out_d.rgb[i]));
+  // A Gaussian at the 1/255 threshold may switch sides between precisions.
+  EXPECT_LT(worst, 1e-2);
+  double mean_diff = 0;
+  for (std::size_t i = 0; i < out.rgb.size(); ++i)
+    mean_diff += std::abs(out.rgb[i] - out_d.rgb[i]);
+  EXPECT_LT(mean_diff / out.rgb.size(), 1e-5);
+}
+
 TEST(RasterizerTest, StiffAndExtremeCasesStayFinite) {
   const RasterCamera camera = TestCamera();
   const std::vector<std::pair<const char*, GaussianModel>> cases = [] {
