@@ -86,9 +86,41 @@ struct RasterStats {
 // A tiled CPU rasterizer. Buffers live in the object and are reused, so
 // steady-state rendering does not allocate. Results do not depend on the
 // number of threads: tiles are independent and the sort is total.
+// Gradients of a loss with respect to the projected (2D) Gaussians: what
+// the blend backward produces and the projection backward consumes.
+template <typename T>
+struct ProjectedGradientsT {
+  std::vector<T> x, y;                       // pixel position of the mean
+  std::vector<T> conic_a, conic_b, conic_c;  // inverse 2D covariance
+  std::vector<T> opacity;                    // the sigmoid's output
+  std::vector<T> r, g, b;                    // colour
+  std::vector<T> depth;        // camera z (through expected depth)
+  void Assign(std::size_t n);  // n zeros in every array
+};
+
 template <typename T>
 class RasterizerT {
  public:
+  // Bins and blends given projected Gaussians (the 2D stage alone, e.g. to
+  // check its gradients by finite differences); Forward is Project + this.
+  void ForwardProjected(const ProjectedGaussiansT<T>& projected,
+                        const RasterCameraT<T>& camera,
+                        const RasterSettingsT<T>& settings,
+                        RenderOutputT<T>* out);
+
+  // The blend's backward, from the last forward's saved state (final
+  // transmittance, last contributor, sorted ids): gradients of the loss with
+  // respect to each projected Gaussian, given its gradients with respect to
+  // the outputs (H x W x 3, H x W, H x W; an empty vector means zero).
+  // Deterministic whatever the thread count: per-entry gradients are
+  // reduced in entry order.
+  void BlendBackward(const RasterCameraT<T>& camera,
+                     const RasterSettingsT<T>& settings,
+                     const RenderOutputT<T>& out, const std::vector<T>& d_rgb,
+                     const std::vector<T>& d_depth,
+                     const std::vector<T>& d_alpha,
+                     ProjectedGradientsT<T>* grad);
+
   void Forward(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
                const RasterSettingsT<T>& settings, RenderOutputT<T>* out);
 
@@ -117,11 +149,13 @@ class RasterizerT {
   std::vector<T> final_t_;
   std::vector<std::uint32_t> last_;
   RasterStats stats_;
+  std::vector<T> entry_grads_;  // blend backward: 10 per (tile, Gaussian) entry
 };
 
 using RasterSettings = RasterSettingsT<float>;
 using RenderOutput = RenderOutputT<float>;
 using ProjectedGaussians = ProjectedGaussiansT<float>;
 using Rasterizer = RasterizerT<float>;
+using ProjectedGradients = ProjectedGradientsT<float>;
 
 }  // namespace pano4d

@@ -342,6 +342,17 @@ void RasterizerT<T>::Forward(const GaussianModelT<T>& model,
   Blend(camera, settings, out);
 }
 
+template <typename T>
+void RasterizerT<T>::ForwardProjected(const ProjectedGaussiansT<T>& projected,
+                                      const RasterCameraT<T>& camera,
+                                      const RasterSettingsT<T>& settings,
+                                      RenderOutputT<T>* out) {
+  projected_ = projected;
+  Bin(camera);
+  stats_.tile_entries = ids_.size();
+  Blend(camera, settings, out);
+}
+
 template struct ProjectedGaussiansT<float>;
 template struct ProjectedGaussiansT<double>;
 template class RasterizerT<float>;

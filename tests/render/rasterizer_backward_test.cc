@@ -1,0 +1,121 @@
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "src/render/rasterizer.h"
+
+namespace pano4d {
+namespace {
+
+using Rd = RasterizerT<double>;
+
+// A loss that weights every output: L = sum w_rgb rgb + w_d depth + w_a alpha.
+struct Weights {
+  std::vector<double> rgb, depth, alpha;
+  double Loss(const RenderOutputT<double>& out) const {
+    double l = 0;
+    for (std::size_t i = 0; i < rgb.size(); ++i) l += rgb[i] * out.rgb[i];
+    for (std::size_t i = 0; i < depth.size(); ++i)
+      l += depth[i] * out.depth[i] + alpha[i] * out.alpha[i];
+    return l;
+  }
+};
+
+GaussianModelT<double> Scene(unsigned seed, int n) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  GaussianModelT<double> m;
+  m.Resize(n);
+  for (int i = 0; i < n; ++i) {
+    m.means[3 * i] = 0.25 * u(rng);
+    m.means[3 * i + 1] = 0.2 * u(rng);
+    m.means[3 * i + 2] = 2.0 + 0.5 * u(rng);
+    for (int k = 0; k < 3; ++k) {
+      m.log_scales[3 * i + k] = std::log(0.04 + 0.02 * u(rng));
+      m.sh[3 * i + k] = 0.8 * u(rng);
+    }
+    for (int k = 0; k < 4; ++k) m.quats[4 * i + k] = u(rng);
+    m.opacities[i] = 1.5 * u(rng);
+  }
+  return m;
+}
+
+TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
+  RasterCameraT<double> camera;
+  camera.width = 40;
+  camera.height = 32;
+  camera.fx = camera.fy = 60;
+  camera.cx = 20;
+  camera.cy = 16;
+  RasterSettingsT<double> settings;
+  settings.background = Eigen::Vector3d(0.2, 0.5, 0.1);
+  int checked = 0, good = 0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const GaussianModelT<double> model = Scene(seed, 24);
+    Rd rasterizer;
+    RenderOutputT<double> out;
+    rasterizer.Forward(model, camera, settings, &out);
+    const ProjectedGaussiansT<double> projected = rasterizer.projected();
+    std::mt19937 rng(seed + 10);
+    std::uniform_real_distribution<double> u(-1, 1);
+    Weights w;
+    for (std::size_t i = 0; i < out.rgb.size(); ++i) w.rgb.push_back(u(rng));
+    for (std::size_t i = 0; i < out.depth.size(); ++i) {
+      w.depth.push_back(0.3 * u(rng));
+      w.alpha.push_back(u(rng));
+    }
+    rasterizer.ForwardProjected(projected, camera, settings, &out);
+    ProjectedGradientsT<double> grad;
+    rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
+                             &grad);
+
+    using Field = std::vector<double> ProjectedGaussiansT<double>::*;
+    using GradField = std::vector<double> ProjectedGradientsT<double>::*;
+    const std::vector<std::tuple<const char*, Field, GradField>> fields = {
+        {"x", &ProjectedGaussiansT<double>::x, &ProjectedGradientsT<double>::x},
+        {"y", &ProjectedGaussiansT<double>::y, &ProjectedGradientsT<double>::y},
+        {"conic_a", &ProjectedGaussiansT<double>::conic_a,
+         &ProjectedGradientsT<double>::conic_a},
+        {"conic_b", &ProjectedGaussiansT<double>::conic_b,
+         &ProjectedGradientsT<double>::conic_b},
+        {"conic_c", &ProjectedGaussiansT<double>::conic_c,
+         &ProjectedGradientsT<double>::conic_c},
+        {"opacity", &ProjectedGaussiansT<double>::opacity,
+         &ProjectedGradientsT<double>::opacity},
+        {"r", &ProjectedGaussiansT<double>::r, &ProjectedGradientsT<double>::r},
+        {"g", &ProjectedGaussiansT<double>::g, &ProjectedGradientsT<double>::g},
+        {"b", &ProjectedGaussiansT<double>::b, &ProjectedGradientsT<double>::b},
+        {"depth", &ProjectedGaussiansT<double>::depth,
+         &ProjectedGradientsT<double>::depth},
+    };
+    for (std::size_t g = 0; g < projected.x.size(); ++g) {
+      if (projected.radius[g] == 0) continue;
+      for (const auto& [name, field, grad_field] : fields) {
+        const double h = 1e-6 * std::max(1.0, std::abs((projected.*field)[g]));
+        ProjectedGaussiansT<double> plus = projected, minus = projected;
+        (plus.*field)[g] += h;
+        (minus.*field)[g] -= h;
+        RenderOutputT<double> out_plus, out_minus;
+        Rd().ForwardProjected(plus, camera, settings, &out_plus);
+        Rd().ForwardProjected(minus, camera, settings, &out_minus);
+        const double numeric = (w.Loss(out_plus) - w.Loss(out_minus)) / (2 * h);
+        const double analytic = (grad.*grad_field)[g];
+        const double error =
+            std::abs(numeric - analytic) / std::max(1e-3, std::abs(numeric));
+        ++checked;
+        if (error < 1e-3) {
+          ++good;
+        } else {
+          ADD_FAILURE() << "seed " << seed << " Gaussian " << g << " " << name
+                        << ": analytic " << analytic << " numeric " << numeric;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 500);
+  std::cout << good << " of " << checked << " blend gradients within 1e-3\n";
+}
+
+}  // namespace
+}  // namespace pano4d
