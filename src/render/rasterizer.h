@@ -98,6 +98,16 @@ struct ProjectedGradientsT {
   void Assign(std::size_t n);  // n zeros in every array
 };
 
+// Gradients of a loss with respect to the model's parameters, laid out as
+// GaussianModelT, plus the screen-space (pixel) gradient of each mean that
+// densification looks at.
+template <typename T>
+struct GaussianGradientsT {
+  std::vector<T> means, log_scales, quats, opacities, sh;
+  std::vector<T> means2d;                       // N x 2
+  void Assign(const GaussianModelT<T>& model);  // zeros, sized like the model
+};
+
 template <typename T>
 class RasterizerT {
  public:
@@ -120,6 +130,13 @@ class RasterizerT {
                      const std::vector<T>& d_depth,
                      const std::vector<T>& d_alpha,
                      ProjectedGradientsT<T>* grad);
+
+  // The projection's backward: from the 2D gradients of BlendBackward to
+  // the model's parameters. `model` and `camera` must be the last forward's.
+  void ProjectBackward(const GaussianModelT<T>& model,
+                       const RasterCameraT<T>& camera,
+                       const ProjectedGradientsT<T>& grad2d,
+                       GaussianGradientsT<T>* grad) const;
 
   void Forward(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
                const RasterSettingsT<T>& settings, RenderOutputT<T>* out);
@@ -157,5 +174,6 @@ using RenderOutput = RenderOutputT<float>;
 using ProjectedGaussians = ProjectedGaussiansT<float>;
 using Rasterizer = RasterizerT<float>;
 using ProjectedGradients = ProjectedGradientsT<float>;
+using GaussianGradients = GaussianGradientsT<float>;
 
 }  // namespace pano4d

@@ -42,6 +42,40 @@ void ShBasis(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* b) {
 }
 
 template <typename T>
+void ShBasisGradient(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* d) {
+  const int k_count = (degree + 1) * (degree + 1);
+  for (int i = 0; i < 3 * k_count; ++i) d[i] = T(0);
+  if (degree < 1) return;
+  const T x = dir.x(), y = dir.y(), z = dir.z();
+  const auto set = [&](int k, T dx, T dy, T dz) {
+    d[3 * k] = dx;
+    d[3 * k + 1] = dy;
+    d[3 * k + 2] = dz;
+  };
+  set(1, 0, -kC1, 0);
+  set(2, 0, 0, kC1);
+  set(3, -kC1, 0, 0);
+  if (degree < 2) return;
+  const T xx = x * x, yy = y * y, zz = z * z;
+  set(4, kC2[0] * y, kC2[0] * x, 0);
+  set(5, 0, kC2[1] * z, kC2[1] * y);
+  set(6, -2 * kC2[2] * x, -2 * kC2[2] * y, 4 * kC2[2] * z);
+  set(7, kC2[3] * z, 0, kC2[3] * x);
+  set(8, 2 * kC2[4] * x, -2 * kC2[4] * y, 0);
+  if (degree < 3) return;
+  set(9, 6 * kC3[0] * x * y, kC3[0] * (3 * xx - 3 * yy), 0);
+  set(10, kC3[1] * y * z, kC3[1] * x * z, kC3[1] * x * y);
+  set(11, -2 * kC3[2] * x * y, kC3[2] * (4 * zz - xx - 3 * yy),
+      8 * kC3[2] * y * z);
+  set(12, -6 * kC3[3] * x * z, -6 * kC3[3] * y * z,
+      kC3[3] * (6 * zz - 3 * xx - 3 * yy));
+  set(13, kC3[4] * (4 * zz - 3 * xx - yy), -2 * kC3[4] * x * y,
+      8 * kC3[4] * x * z);
+  set(14, 2 * kC3[5] * x * z, -2 * kC3[5] * y * z, kC3[5] * (xx - yy));
+  set(15, kC3[6] * (3 * xx - 3 * yy), -6 * kC3[6] * x * y, 0);
+}
+
+template <typename T>
 Eigen::Matrix<T, 3, 1> ShColor(int degree, const T* coeffs,
                                const Eigen::Matrix<T, 3, 1>& dir,
                                bool* clamped) {
@@ -63,6 +97,10 @@ Eigen::Matrix<T, 3, 1> ShColor(int degree, const T* coeffs,
 
 template void ShBasis<float>(int, const Eigen::Matrix<float, 3, 1>&, float*);
 template void ShBasis<double>(int, const Eigen::Matrix<double, 3, 1>&, double*);
+template void ShBasisGradient<float>(int, const Eigen::Matrix<float, 3, 1>&,
+                                     float*);
+template void ShBasisGradient<double>(int, const Eigen::Matrix<double, 3, 1>&,
+                                      double*);
 template Eigen::Matrix<float, 3, 1> ShColor<float>(
     int, const float*, const Eigen::Matrix<float, 3, 1>&, bool*);
 template Eigen::Matrix<double, 3, 1> ShColor<double>(

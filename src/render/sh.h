@@ -12,6 +12,11 @@ namespace pano4d {
 template <typename T>
 void ShBasis(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* basis);
 
+// d basis_k / d dir for the K basis functions (K x 3, row-major), treating
+// dir's components as free (the caller applies the normalisation).
+template <typename T>
+void ShBasisGradient(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* d_basis);
+
 // Colour from `coeffs` (K x 3, coefficient-major) seen along `dir` (unit,
 // from the camera centre to the Gaussian). `clamped` (optional, 3) records
 // which channels hit the max(0, .) clamp, for the backward pass.

@@ -1,5 +1,8 @@
 #include <cmath>
+#include <map>
 #include <random>
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
@@ -115,6 +118,86 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
   }
   EXPECT_GT(checked, 500);
   std::cout << good << " of " << checked << " blend gradients within 1e-3\n";
+}
+
+TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
+  RasterCameraT<double> camera;
+  camera.width = 40;
+  camera.height = 32;
+  camera.fx = camera.fy = 60;
+  camera.cx = 20;
+  camera.cy = 16;
+  // A rotated camera, so that W is not the identity.
+  camera.rotation =
+      Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 2, 0.5).normalized())
+          .toRotationMatrix();
+  camera.translation = Eigen::Vector3d(0.05, -0.03, 0.1);
+  RasterSettingsT<double> settings;
+  settings.background = Eigen::Vector3d(0.3, 0.1, 0.6);
+  int checked = 0, good = 0;
+  std::map<std::string, int> bad_by_kind;
+  for (unsigned seed : {4u, 5u, 6u}) {
+    GaussianModelT<double> model = Scene(seed, 16);
+    model.sh_degree = 1;
+    model.sh.assign(16 * 4 * 3, 0.0);
+    std::mt19937 rng(seed + 20);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (double& c : model.sh) c = 0.4 * u(rng);
+    Rd rasterizer;
+    RenderOutputT<double> out;
+    rasterizer.Forward(model, camera, settings, &out);
+    Weights w;
+    for (std::size_t i = 0; i < out.rgb.size(); ++i) w.rgb.push_back(u(rng));
+    for (std::size_t i = 0; i < out.depth.size(); ++i) {
+      w.depth.push_back(0.3 * u(rng));
+      w.alpha.push_back(u(rng));
+    }
+    ProjectedGradientsT<double> grad2d;
+    rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
+                             &grad2d);
+    GaussianGradientsT<double> grad;
+    rasterizer.ProjectBackward(model, camera, grad2d, &grad);
+
+    const std::vector<
+        std::pair<std::string, std::vector<double> GaussianModelT<double>::*>>
+        params = {{"means", &GaussianModelT<double>::means},
+                  {"log_scales", &GaussianModelT<double>::log_scales},
+                  {"quats", &GaussianModelT<double>::quats},
+                  {"opacities", &GaussianModelT<double>::opacities},
+                  {"sh", &GaussianModelT<double>::sh}};
+    const std::map<std::string, const std::vector<double>*> analytic = {
+        {"means", &grad.means},
+        {"log_scales", &grad.log_scales},
+        {"quats", &grad.quats},
+        {"opacities", &grad.opacities},
+        {"sh", &grad.sh}};
+    for (const auto& [name, field] : params) {
+      for (std::size_t k = 0; k < (model.*field).size(); ++k) {
+        const double h = 1e-6 * std::max(1.0, std::abs((model.*field)[k]));
+        GaussianModelT<double> plus = model, minus = model;
+        (plus.*field)[k] += h;
+        (minus.*field)[k] -= h;
+        RenderOutputT<double> out_plus, out_minus;
+        Rd().Forward(plus, camera, settings, &out_plus);
+        Rd().Forward(minus, camera, settings, &out_minus);
+        const double numeric = (w.Loss(out_plus) - w.Loss(out_minus)) / (2 * h);
+        const double a = (*analytic.at(name))[k];
+        const double error =
+            std::abs(numeric - a) / std::max(1e-3, std::abs(numeric));
+        ++checked;
+        if (error < 1e-3) {
+          ++good;
+        } else {
+          ++bad_by_kind[name];
+          std::cout << "seed " << seed << " " << name << "[" << k
+                    << "]: analytic " << a << " numeric " << numeric << "\n";
+        }
+      }
+    }
+  }
+  std::cout << good << " of " << checked << " model gradients within 1e-3\n";
+  EXPECT_GE(good, 0.99 * checked);
+  EXPECT_GT(checked, 1000);
 }
 
 }  // namespace

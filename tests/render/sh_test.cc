@@ -33,6 +33,24 @@ TEST(ShTest, BasisIsOrthonormalOnTheSphere) {
   }
 }
 
+TEST(ShTest, BasisGradientMatchesCentralDifferences) {
+  const Eigen::Vector3d dir = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  double analytic[48];
+  ShBasisGradient(3, dir, analytic);
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d plus = dir, minus = dir;
+    plus(a) += 1e-6;
+    minus(a) -= 1e-6;
+    double bp[16], bm[16];
+    ShBasis(3, plus, bp);
+    ShBasis(3, minus, bm);
+    for (int k = 0; k < 16; ++k) {
+      EXPECT_NEAR(analytic[3 * k + a], (bp[k] - bm[k]) / 2e-6, 1e-8)
+          << "basis " << k << " axis " << a;
+    }
+  }
+}
+
 TEST(ShTest, ColourIsOffsetByAHalfAndClampedAtZero) {
   float coeffs[16 * 3] = {};
   coeffs[0] = 1.0f;   // red DC
