@@ -75,6 +75,10 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
         for (std::uint32_t k = last_[pixel]; k-- > begin;) {
           const std::uint32_t g = ids_[k];
           const T dx = fx - p.x[g], dy = fy - p.y[g];
+          // Outside the Gaussian's alpha >= kMinAlpha box: the forward never
+          // visited this pixel for it.
+          if (std::abs(dx) > p.extent_x[g] || std::abs(dy) > p.extent_y[g])
+            continue;
           const T power =
               -T(0.5) * (p.conic_a[g] * dx * dx + p.conic_c[g] * dy * dy) -
               p.conic_b[g] * dx * dy;
