@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "src/core/error.h"
+#include "src/render/blend_span.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -39,75 +40,91 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
   constexpr int kPer = 10;  // x, y, conic a b c, opacity, r g b, depth
   entry_grads_.assign(kPer * ids_.size(), T(0));
 
-  // Each tile's entries are its own, so tiles run in parallel without
-  // sharing a gradient slot.
+  // Gaussian-major, back to front, as the forward: each Gaussian updates
+  // the pixels of its span (GaussianSpan) whose last contributor lies beyond
+  // it, so every pixel sees the same Gaussians in reverse order as a
+  // pixel-major walk would. A tile's entries are its own: tiles run in
+  // parallel without sharing a gradient slot.
 #pragma omp parallel for schedule(dynamic, 1)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
-    const std::uint32_t begin = ranges_[2 * tile];
+    constexpr int kTilePixels = kTileSize * kTileSize;
+    T t[kTilePixels], t_final[kTilePixels], d_acc_depth[kTilePixels],
+        d_accumulated[kTilePixels];
+    T dc[3][kTilePixels], behind[3][kTilePixels], behind_depth[kTilePixels];
+    std::uint32_t last[kTilePixels];
+    const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
     const int x_begin = (tile % tiles_x) * kTileSize,
               y_begin = (tile / tiles_x) * kTileSize;
-    for (int py = y_begin; py < std::min(y_begin + kTileSize, height); ++py) {
-      for (int px = x_begin; px < std::min(x_begin + kTileSize, width); ++px) {
+    const int x_end = std::min(x_begin + kTileSize, width),
+              y_end = std::min(y_begin + kTileSize, height);
+    for (int py = y_begin; py < y_end; ++py) {
+      for (int px = x_begin; px < x_end; ++px) {
+        const int i = (py - y_begin) * kTileSize + (px - x_begin);
         const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
-        const T fx = px + T(0.5), fy = py + T(0.5);
-        const T t_final = final_t_[pixel];
-        const T dc[3] = {d_rgb.empty() ? T(0) : d_rgb[3 * pixel],
-                         d_rgb.empty() ? T(0) : d_rgb[3 * pixel + 1],
-                         d_rgb.empty() ? T(0) : d_rgb[3 * pixel + 2]};
+        t_final[i] = t[i] = final_t_[pixel];
+        last[i] = last_[pixel];
+        for (int c = 0; c < 3; ++c) {
+          dc[c][i] = d_rgb.empty() ? T(0) : d_rgb[3 * pixel + c];
+          behind[c][i] = settings.background(c);
+        }
+        behind_depth[i] = 0;
         // Outputs: depth_out = D / A with A = 1 - T_final (when A is large
         // enough to hold a surface), alpha_out = A.
-        const T accumulated = 1 - t_final;
-        T d_acc_depth = 0;
-        T d_accumulated = d_alpha.empty() ? T(0) : d_alpha[pixel];
+        const T accumulated = 1 - t_final[i];
+        d_acc_depth[i] = 0;
+        d_accumulated[i] = d_alpha.empty() ? T(0) : d_alpha[pixel];
         if (!d_depth.empty() && accumulated > T(kMinAlphaForDepth)) {
           const T depth_sum = out.depth[pixel] * accumulated;
-          d_acc_depth = d_depth[pixel] / accumulated;
-          d_accumulated -=
+          d_acc_depth[i] = d_depth[pixel] / accumulated;
+          d_accumulated[i] -=
               d_depth[pixel] * depth_sum / (accumulated * accumulated);
         }
-        // Back to front: what lies behind Gaussian i (the background for the
-        // last one), as seen from just after i; transmittance recovered by
-        // division (alpha <= kMaxAlpha keeps 1 - alpha >= 0.01).
-        T behind[3] = {settings.background.x(), settings.background.y(),
-                       settings.background.z()};
-        T behind_depth = 0;
-        T t = t_final;
-        for (std::uint32_t k = last_[pixel]; k-- > begin;) {
-          const std::uint32_t g = ids_[k];
-          const T dx = fx - p.x[g], dy = fy - p.y[g];
-          // Outside the Gaussian's alpha >= kMinAlpha box: the forward never
-          // visited this pixel for it.
-          if (std::abs(dx) > p.extent_x[g] || std::abs(dy) > p.extent_y[g])
-            continue;
+      }
+    }
+    for (std::uint32_t k = end; k-- > begin;) {
+      const std::uint32_t g = ids_[k];
+      const GaussianSpan<T> span(p, g, x_begin, x_end, y_begin, y_end);
+      const T gx = p.x[g], gy = p.y[g], ca = p.conic_a[g], cb = p.conic_b[g],
+              cc = p.conic_c[g];
+      const T op = p.opacity[g], z = p.depth[g];
+      const T color[3] = {p.r[g], p.g[g], p.b[g]};
+      T* e = &entry_grads_[kPer * static_cast<std::size_t>(k)];
+      for (int py = span.first_row(); py <= span.last_row(); ++py) {
+        int x0, x1;
+        if (!span.Row(py, &x0, &x1)) continue;
+        const T dy = py + T(0.5) - gy;
+        for (int px = x0; px <= x1; ++px) {
+          const int i = (py - y_begin) * kTileSize + (px - x_begin);
+          if (k >= last[i]) continue;  // behind this pixel's last contributor
+          const T dx = px + T(0.5) - gx;
           const T power =
-              -T(0.5) * (p.conic_a[g] * dx * dx + p.conic_c[g] * dy * dy) -
-              p.conic_b[g] * dx * dy;
+              -T(0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
           if (power > 0) continue;
           const T gauss = std::exp(power);
-          const T raw = p.opacity[g] * gauss;
+          const T raw = op * gauss;
           const T alpha = std::min(T(kMaxAlpha), raw);
           if (alpha < T(kMinAlpha)) continue;
-          t /= (1 - alpha);
-          const T w = alpha * t;
-          const T color[3] = {p.r[g], p.g[g], p.b[g]};
-          T* e = &entry_grads_[kPer * static_cast<std::size_t>(k)];
-          T d_alpha_i = t * (p.depth[g] - behind_depth) * d_acc_depth +
-                        d_accumulated * t_final / (1 - alpha);
+          // Transmittance before this Gaussian, recovered by division
+          // (alpha <= kMaxAlpha keeps 1 - alpha >= 0.01).
+          t[i] /= (1 - alpha);
+          const T w = alpha * t[i];
+          T d_alpha_i = t[i] * (z - behind_depth[i]) * d_acc_depth[i] +
+                        d_accumulated[i] * t_final[i] / (1 - alpha);
           for (int c = 0; c < 3; ++c) {
-            e[6 + c] += w * dc[c];
-            d_alpha_i += t * (color[c] - behind[c]) * dc[c];
-            behind[c] = alpha * color[c] + (1 - alpha) * behind[c];
+            e[6 + c] += w * dc[c][i];
+            d_alpha_i += t[i] * (color[c] - behind[c][i]) * dc[c][i];
+            behind[c][i] = alpha * color[c] + (1 - alpha) * behind[c][i];
           }
-          e[9] += w * d_acc_depth;
-          behind_depth = alpha * p.depth[g] + (1 - alpha) * behind_depth;
+          e[9] += w * d_acc_depth[i];
+          behind_depth[i] = alpha * z + (1 - alpha) * behind_depth[i];
           if (raw > T(kMaxAlpha)) continue;  // min(0.99, .) is flat there
           const T d_power = raw * d_alpha_i;
           e[5] += gauss * d_alpha_i;
           e[2] += -T(0.5) * dx * dx * d_power;
           e[3] += -dx * dy * d_power;
           e[4] += -T(0.5) * dy * dy * d_power;
-          e[0] += (p.conic_a[g] * dx + p.conic_b[g] * dy) * d_power;
-          e[1] += (p.conic_c[g] * dy + p.conic_b[g] * dx) * d_power;
+          e[0] += (ca * dx + cb * dy) * d_power;
+          e[1] += (cc * dy + cb * dx) * d_power;
         }
       }
     }

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "src/core/error.h"
+#include "src/render/blend_span.h"
 #include "src/render/rasterizer.h"
 #include "src/render/sh.h"
 
@@ -248,35 +249,15 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
     for (std::uint32_t k = begin; k < end && alive > 0; ++k) {
       const std::uint32_t g = ids_[k];
       const T gx = p.x[g], gy = p.y[g];
-      // Pixels whose centre (px + 0.5) lies within the extent.
-      const int px0 = std::max(
-          x_begin, static_cast<int>(std::ceil(gx - p.extent_x[g] - T(0.5))));
-      const int px1 = std::min(
-          x_end - 1, static_cast<int>(std::floor(gx + p.extent_x[g] - T(0.5))));
-      const int py0 = std::max(
-          y_begin, static_cast<int>(std::ceil(gy - p.extent_y[g] - T(0.5))));
-      const int py1 = std::min(
-          y_end - 1, static_cast<int>(std::floor(gy + p.extent_y[g] - T(0.5))));
+      const GaussianSpan<T> span(p, g, x_begin, x_end, y_begin, y_end);
       const T ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
               op = p.opacity[g];
       const T red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
-      // q = a dx^2 + 2 b dx dy + c dy^2 <= kq is where alpha >= kMinAlpha
-      // (kq slightly inflated against rounding); per row, that is an
-      // interval of dx: the roots of the quadratic.
-      const T kq = T(2.0) * std::log(op / T(kMinAlpha)) * (1 + 1e-4f) + 1e-4f;
-      for (int py = py0; py <= py1; ++py) {
+      for (int py = span.first_row(); py <= span.last_row(); ++py) {
+        int rx0, rx1;
+        if (!span.Row(py, &rx0, &rx1)) continue;
         const T dy = py + T(0.5) - gy;
         const T row = -T(0.5) * cc * dy * dy;
-        const T half_b = cbb * dy;
-        const T discriminant = half_b * half_b - ca * (cc * dy * dy - kq);
-        if (!(discriminant >= 0)) continue;
-        const T root = std::sqrt(discriminant);
-        const int rx0 = std::max(
-            px0, static_cast<int>(std::ceil(gx + (-half_b - root) / ca -
-                                            T(0.5) - T(kAlphaBoxMargin))));
-        const int rx1 = std::min(
-            px1, static_cast<int>(std::floor(gx + (-half_b + root) / ca -
-                                             T(0.5) + T(kAlphaBoxMargin))));
         for (int px = rx0; px <= rx1; ++px) {
           const int i = (py - y_begin) * kTileSize + (px - x_begin);
           if (done[i]) continue;

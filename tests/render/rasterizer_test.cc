@@ -185,6 +185,39 @@ TEST(RasterizerTest, DoubleAndFloatRenderTheSameImage) {
   EXPECT_LT(mean_diff / out.rgb.size(), 1e-5);
 }
 
+TEST(RasterizerTest, GradientsAreTheSameBytesWithOneAndTwoThreads) {
+  const GaussianModel model = RandomScene(5000, 4);
+  const RasterCamera camera = TestCamera();
+  const auto gradients = [&](int threads) {
+    omp_set_num_threads(threads);
+    Rasterizer r;
+    RenderOutput out;
+    r.Forward(model, camera, {}, &out);
+    std::vector<float> d_rgb(out.rgb.size());
+    for (std::size_t i = 0; i < d_rgb.size(); ++i)
+      d_rgb[i] = std::sin(0.37f * i);
+    ProjectedGradients grad2d;
+    GaussianGradients grad;
+    r.BlendBackward(camera, {}, out, d_rgb, out.depth, {}, &grad2d);
+    r.ProjectBackward(model, camera, grad2d, &grad);
+    return grad;
+  };
+  const int threads = omp_get_max_threads();
+  const GaussianGradients one = gradients(1), two = gradients(2);
+  omp_set_num_threads(threads);
+  for (const auto& [a, b] : {std::pair{&one.means, &two.means},
+                             {&one.log_scales, &two.log_scales},
+                             {&one.quats, &two.quats},
+                             {&one.opacities, &two.opacities},
+                             {&one.sh, &two.sh}}) {
+    ASSERT_EQ(a->size(), b->size());
+    EXPECT_EQ(std::memcmp(a->data(), b->data(), a->size() * sizeof(float)), 0);
+  }
+  double norm = 0;
+  for (const float v : one.means) norm += std::abs(v);
+  EXPECT_GT(norm, 0.0);  // the gradients are not trivially zero
+}
+
 TEST(RasterizerTest, StiffAndExtremeCasesStayFinite) {
   const RasterCamera camera = TestCamera();
   const std::vector<std::pair<const char*, GaussianModel>> cases = [] {
@@ -226,6 +259,17 @@ TEST(RasterizerTest, StiffAndExtremeCasesStayFinite) {
     RenderOutput out;
     r.Forward(model, camera, {}, &out);
     EXPECT_TRUE(AllFinite(out)) << name;
+    // ... and so are the gradients.
+    ProjectedGradients grad2d;
+    GaussianGradients grad;
+    r.BlendBackward(camera, {}, out, std::vector<float>(out.rgb.size(), 1.0f),
+                    out.depth, std::vector<float>(out.alpha.size(), 1.0f),
+                    &grad2d);
+    r.ProjectBackward(model, camera, grad2d, &grad);
+    for (const auto* v : {&grad.means, &grad.log_scales, &grad.quats,
+                          &grad.opacities, &grad.sh}) {
+      for (const float x : *v) ASSERT_TRUE(std::isfinite(x)) << name;
+    }
     for (const float a : out.alpha) {
       ASSERT_GE(a, 0.0f) << name;
       ASSERT_LE(a, 1.0f) << name;
