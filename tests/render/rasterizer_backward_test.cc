@@ -44,6 +44,35 @@ GaussianModelT<double> Scene(unsigned seed, int n) {
   return m;
 }
 
+// The central difference of `loss` in entry k of `field`, on copies of
+// `params` moved by +-h.
+template <typename Params, typename Loss>
+double CentralDifference(const Params& params,
+                         std::vector<double> Params::*field, std::size_t k,
+                         const Loss& loss) {
+  const double h = 1e-6 * std::max(1.0, std::abs((params.*field)[k]));
+  Params plus = params, minus = params;
+  (plus.*field)[k] += h;
+  (minus.*field)[k] -= h;
+  return (loss(plus) - loss(minus)) / (2 * h);
+}
+
+// Counts the analytic gradients within 1e-3 (relative, with a floor) of
+// the numeric ones, and reports the others.
+struct Tally {
+  int checked = 0, good = 0;
+  void Add(double analytic, double numeric, const std::string& what) {
+    ++checked;
+    if (std::abs(numeric - analytic) / std::max(1e-3, std::abs(numeric)) <
+        1e-3) {
+      ++good;
+    } else {
+      std::cout << what << ": analytic " << analytic << " numeric " << numeric
+                << "\n";
+    }
+  }
+};
+
 TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
   RasterCameraT<double> camera;
   camera.width = 40;
@@ -53,7 +82,7 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
   camera.cy = 16;
   RasterSettingsT<double> settings;
   settings.background = Eigen::Vector3d(0.2, 0.5, 0.1);
-  int checked = 0, good = 0;
+  Tally tally;
   for (unsigned seed : {1u, 2u, 3u}) {
     const GaussianModelT<double> model = Scene(seed, 24);
     Rd rasterizer;
@@ -95,29 +124,22 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
     for (std::size_t g = 0; g < projected.x.size(); ++g) {
       if (projected.radius[g] == 0) continue;
       for (const auto& [name, field, grad_field] : fields) {
-        const double h = 1e-6 * std::max(1.0, std::abs((projected.*field)[g]));
-        ProjectedGaussiansT<double> plus = projected, minus = projected;
-        (plus.*field)[g] += h;
-        (minus.*field)[g] -= h;
-        RenderOutputT<double> out_plus, out_minus;
-        Rd().ForwardProjected(plus, camera, settings, &out_plus);
-        Rd().ForwardProjected(minus, camera, settings, &out_minus);
-        const double numeric = (w.Loss(out_plus) - w.Loss(out_minus)) / (2 * h);
-        const double analytic = (grad.*grad_field)[g];
-        const double error =
-            std::abs(numeric - analytic) / std::max(1e-3, std::abs(numeric));
-        ++checked;
-        if (error < 1e-3) {
-          ++good;
-        } else {
-          ADD_FAILURE() << "seed " << seed << " Gaussian " << g << " " << name
-                        << ": analytic " << analytic << " numeric " << numeric;
-        }
+        const double numeric = CentralDifference(
+            projected, field, g, [&](const ProjectedGaussiansT<double>& q) {
+              RenderOutputT<double> o;
+              Rd().ForwardProjected(q, camera, settings, &o);
+              return w.Loss(o);
+            });
+        tally.Add((grad.*grad_field)[g], numeric,
+                  "seed " + std::to_string(seed) + " Gaussian " +
+                      std::to_string(g) + " " + name);
       }
     }
   }
-  EXPECT_GT(checked, 500);
-  std::cout << good << " of " << checked << " blend gradients within 1e-3\n";
+  EXPECT_EQ(tally.good, tally.checked);
+  EXPECT_GT(tally.checked, 500);
+  std::cout << tally.good << " of " << tally.checked
+            << " blend gradients within 1e-3\n";
 }
 
 TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
@@ -134,8 +156,7 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
   camera.translation = Eigen::Vector3d(0.05, -0.03, 0.1);
   RasterSettingsT<double> settings;
   settings.background = Eigen::Vector3d(0.3, 0.1, 0.6);
-  int checked = 0, good = 0;
-  std::map<std::string, int> bad_by_kind;
+  Tally tally;
   for (unsigned seed : {4u, 5u, 6u}) {
     GaussianModelT<double> model = Scene(seed, 16);
     model.sh_degree = 1;
@@ -173,31 +194,22 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
         {"sh", &grad.sh}};
     for (const auto& [name, field] : params) {
       for (std::size_t k = 0; k < (model.*field).size(); ++k) {
-        const double h = 1e-6 * std::max(1.0, std::abs((model.*field)[k]));
-        GaussianModelT<double> plus = model, minus = model;
-        (plus.*field)[k] += h;
-        (minus.*field)[k] -= h;
-        RenderOutputT<double> out_plus, out_minus;
-        Rd().Forward(plus, camera, settings, &out_plus);
-        Rd().Forward(minus, camera, settings, &out_minus);
-        const double numeric = (w.Loss(out_plus) - w.Loss(out_minus)) / (2 * h);
-        const double a = (*analytic.at(name))[k];
-        const double error =
-            std::abs(numeric - a) / std::max(1e-3, std::abs(numeric));
-        ++checked;
-        if (error < 1e-3) {
-          ++good;
-        } else {
-          ++bad_by_kind[name];
-          std::cout << "seed " << seed << " " << name << "[" << k
-                    << "]: analytic " << a << " numeric " << numeric << "\n";
-        }
+        const double numeric = CentralDifference(
+            model, field, k, [&](const GaussianModelT<double>& m) {
+              RenderOutputT<double> o;
+              Rd().Forward(m, camera, settings, &o);
+              return w.Loss(o);
+            });
+        tally.Add((*analytic.at(name))[k], numeric,
+                  "seed " + std::to_string(seed) + " " + name + "[" +
+                      std::to_string(k) + "]");
       }
     }
   }
-  std::cout << good << " of " << checked << " model gradients within 1e-3\n";
-  EXPECT_GE(good, 0.99 * checked);
-  EXPECT_GT(checked, 1000);
+  std::cout << tally.good << " of " << tally.checked
+            << " model gradients within 1e-3\n";
+  EXPECT_GE(tally.good, 0.99 * tally.checked);
+  EXPECT_GT(tally.checked, 1000);
 }
 
 }  // namespace
