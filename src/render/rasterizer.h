@@ -70,8 +70,8 @@ struct ProjectedGaussiansT {
   // blend loop visits only those pixels of each tile (the others would be
   // skipped by the alpha test anyway, so results are unchanged).
   std::vector<T> extent_x, extent_y;
-  std::vector<int> tile_x0, tile_y0, tile_x1,
-      tile_y1;                        // tiles touched, [x0, x1)
+  // Tiles touched, [x0, x1) x [y0, y1).
+  std::vector<int> tile_x0, tile_y0, tile_x1, tile_y1;
   std::vector<std::uint8_t> clamped;  // N x 3: SH colour hit max(0, .)
   void Resize(std::size_t n);
 };
@@ -83,9 +83,6 @@ struct RasterStats {
   std::uint64_t pixel_evaluations = 0;  // (Gaussian, pixel) pairs blended
 };
 
-// A tiled CPU rasterizer. Buffers live in the object and are reused, so
-// steady-state rendering does not allocate. Results do not depend on the
-// number of threads: tiles are independent and the sort is total.
 // Gradients of a loss with respect to the projected (2D) Gaussians: what
 // the blend backward produces and the projection backward consumes.
 template <typename T>
@@ -108,6 +105,10 @@ struct GaussianGradientsT {
   void Assign(const GaussianModelT<T>& model);  // zeros, sized like the model
 };
 
+// A tiled CPU rasterizer. Buffers live in the object and are reused, so
+// steady-state rendering does not allocate. Results, gradients included, do
+// not depend on the number of threads: tiles are independent, the sort is
+// total and per-entry gradients are reduced in order.
 template <typename T>
 class RasterizerT {
  public:
