@@ -16,6 +16,17 @@ using Rd = RasterizerT<double>;
 // A loss that weights every output: L = sum w_rgb rgb + w_d depth + w_a alpha.
 struct Weights {
   std::vector<double> rgb, depth, alpha;
+  // Weights in [-1, 1] (depth in [-0.3, 0.3]) for every output of `out`.
+  static Weights Random(const RenderOutputT<double>& out, std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1, 1);
+    Weights w;
+    for (std::size_t i = 0; i < out.rgb.size(); ++i) w.rgb.push_back(u(rng));
+    for (std::size_t i = 0; i < out.depth.size(); ++i) {
+      w.depth.push_back(0.3 * u(rng));
+      w.alpha.push_back(u(rng));
+    }
+    return w;
+  }
   double Loss(const RenderOutputT<double>& out) const {
     double l = 0;
     for (std::size_t i = 0; i < rgb.size(); ++i) l += rgb[i] * out.rgb[i];
@@ -42,6 +53,16 @@ GaussianModelT<double> Scene(unsigned seed, int n) {
     m.opacities[i] = 1.5 * u(rng);
   }
   return m;
+}
+
+RasterCameraT<double> SmallCamera() {
+  RasterCameraT<double> camera;
+  camera.width = 40;
+  camera.height = 32;
+  camera.fx = camera.fy = 60;
+  camera.cx = 20;
+  camera.cy = 16;
+  return camera;
 }
 
 // The central difference of `loss` in entry k of `field`, on copies of
@@ -74,12 +95,7 @@ struct Tally {
 };
 
 TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
-  RasterCameraT<double> camera;
-  camera.width = 40;
-  camera.height = 32;
-  camera.fx = camera.fy = 60;
-  camera.cx = 20;
-  camera.cy = 16;
+  RasterCameraT<double> camera = SmallCamera();
   RasterSettingsT<double> settings;
   settings.background = Eigen::Vector3d(0.2, 0.5, 0.1);
   Tally tally;
@@ -90,13 +106,7 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
     rasterizer.Forward(model, camera, settings, &out);
     const ProjectedGaussiansT<double> projected = rasterizer.projected();
     std::mt19937 rng(seed + 10);
-    std::uniform_real_distribution<double> u(-1, 1);
-    Weights w;
-    for (std::size_t i = 0; i < out.rgb.size(); ++i) w.rgb.push_back(u(rng));
-    for (std::size_t i = 0; i < out.depth.size(); ++i) {
-      w.depth.push_back(0.3 * u(rng));
-      w.alpha.push_back(u(rng));
-    }
+    const Weights w = Weights::Random(out, rng);
     rasterizer.ForwardProjected(projected, camera, settings, &out);
     ProjectedGradientsT<double> grad;
     rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
@@ -143,12 +153,7 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
 }
 
 TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
-  RasterCameraT<double> camera;
-  camera.width = 40;
-  camera.height = 32;
-  camera.fx = camera.fy = 60;
-  camera.cx = 20;
-  camera.cy = 16;
+  RasterCameraT<double> camera = SmallCamera();
   // A rotated camera, so that W is not the identity.
   camera.rotation =
       Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 2, 0.5).normalized())
@@ -167,12 +172,7 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
     Rd rasterizer;
     RenderOutputT<double> out;
     rasterizer.Forward(model, camera, settings, &out);
-    Weights w;
-    for (std::size_t i = 0; i < out.rgb.size(); ++i) w.rgb.push_back(u(rng));
-    for (std::size_t i = 0; i < out.depth.size(); ++i) {
-      w.depth.push_back(0.3 * u(rng));
-      w.alpha.push_back(u(rng));
-    }
+    const Weights w = Weights::Random(out, rng);
     ProjectedGradientsT<double> grad2d;
     rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
                              &grad2d);
