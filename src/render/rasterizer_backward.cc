@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "src/core/error.h"
-#include "src/render/blend_span.h"
+#include "src/render/blend_kernel.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -41,22 +41,36 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
   entry_grads_.assign(kPer * ids_.size(), T(0));
 
   // Gaussian-major, back to front, as the forward: each Gaussian updates
-  // the pixels of its span (GaussianSpan) whose last contributor lies beyond
-  // it, so every pixel sees the same Gaussians in reverse order as a
-  // pixel-major walk would. A tile's entries are its own: tiles run in
+  // the pixels of its box (BoxInTile) whose last contributor lies beyond it,
+  // so every pixel sees the same Gaussians in reverse order as a pixel-major
+  // walk would. Lane groups are branch-free loops, as in the forward; each
+  // lane sums its own share of the Gaussian's gradient and the lanes are
+  // added in a fixed order. A tile's entries are its own: tiles run in
   // parallel without sharing a gradient slot.
 #pragma omp parallel for schedule(dynamic, 1)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     constexpr int kTilePixels = kTileSize * kTileSize;
-    T t[kTilePixels], t_final[kTilePixels], d_acc_depth[kTilePixels],
-        d_accumulated[kTilePixels];
-    T dc[3][kTilePixels], behind[3][kTilePixels], behind_depth[kTilePixels];
-    std::uint32_t last[kTilePixels];
+    alignas(64) T t[kTilePixels], t_final[kTilePixels],
+        d_acc_depth[kTilePixels], d_accumulated[kTilePixels];
+    alignas(64) T dc[3][kTilePixels], behind[3][kTilePixels],
+        behind_depth[kTilePixels], lane_x[kTileSize];
+    alignas(64) T lane_sum[kPer][kTileSize];
+    alignas(64) std::uint32_t last[kTilePixels];
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
     const int x_begin = (tile % tiles_x) * kTileSize,
               y_begin = (tile / tiles_x) * kTileSize;
     const int x_end = std::min(x_begin + kTileSize, width),
               y_end = std::min(y_begin + kTileSize, height);
+    for (int lane = 0; lane < kTileSize; ++lane)
+      lane_x[lane] = x_begin + lane + T(0.5);
+    // Pixels beyond the image (right or bottom edge tiles) have no
+    // contributor: last = 0 keeps every lane loop from touching them.
+    for (int i = 0; i < kTilePixels; ++i) {
+      last[i] = 0;
+      t[i] = t_final[i] = T(1);
+      d_acc_depth[i] = d_accumulated[i] = behind_depth[i] = T(0);
+      for (int c = 0; c < 3; ++c) dc[c][i] = behind[c][i] = T(0);
+    }
     for (int py = y_begin; py < y_end; ++py) {
       for (int px = x_begin; px < x_end; ++px) {
         const int i = (py - y_begin) * kTileSize + (px - x_begin);
@@ -67,11 +81,9 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
           dc[c][i] = d_rgb.empty() ? T(0) : d_rgb[3 * pixel + c];
           behind[c][i] = settings.background(c);
         }
-        behind_depth[i] = 0;
         // Outputs: depth_out = D / A with A = 1 - T_final (when A is large
         // enough to hold a surface), alpha_out = A.
         const T accumulated = 1 - t_final[i];
-        d_acc_depth[i] = 0;
         d_accumulated[i] = d_alpha.empty() ? T(0) : d_alpha[pixel];
         if (!d_depth.empty() && accumulated > T(kMinAlphaForDepth)) {
           const T depth_sum = out.depth[pixel] * accumulated;
@@ -83,49 +95,78 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
     }
     for (std::uint32_t k = end; k-- > begin;) {
       const std::uint32_t g = ids_[k];
-      const GaussianSpan<T> span(p, g, x_begin, x_end, y_begin, y_end);
-      const T gx = p.x[g], gy = p.y[g], ca = p.conic_a[g], cb = p.conic_b[g],
+      TileBox box;
+      if (!BoxInTile(p, g, x_begin, x_end, y_begin, y_end, &box)) continue;
+      const T gx = p.x[g], ca = p.conic_a[g], cb = p.conic_b[g],
               cc = p.conic_c[g];
       const T op = p.opacity[g], z = p.depth[g];
-      const T color[3] = {p.r[g], p.g[g], p.b[g]};
-      T* e = &entry_grads_[kPer * static_cast<std::size_t>(k)];
-      for (int py = span.first_row(); py <= span.last_row(); ++py) {
-        int x0, x1;
-        if (!span.Row(py, &x0, &x1)) continue;
-        const T dy = py + T(0.5) - gy;
-        for (int px = x0; px <= x1; ++px) {
-          const int i = (py - y_begin) * kTileSize + (px - x_begin);
-          if (k >= last[i]) continue;  // behind this pixel's last contributor
-          const T dx = px + T(0.5) - gx;
-          const T power =
-              -T(0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
-          if (power > 0) continue;
-          const T gauss = std::exp(power);
-          const T raw = op * gauss;
-          const T alpha = std::min(T(kMaxAlpha), raw);
-          if (alpha < T(kMinAlpha)) continue;
-          // Transmittance before this Gaussian, recovered by division
-          // (alpha <= kMaxAlpha keeps 1 - alpha >= 0.01).
-          t[i] /= (1 - alpha);
-          const T w = alpha * t[i];
-          T d_alpha_i = t[i] * (z - behind_depth[i]) * d_acc_depth[i] +
-                        d_accumulated[i] * t_final[i] / (1 - alpha);
-          for (int c = 0; c < 3; ++c) {
-            e[6 + c] += w * dc[c][i];
-            d_alpha_i += t[i] * (color[c] - behind[c][i]) * dc[c][i];
-            behind[c][i] = alpha * color[c] + (1 - alpha) * behind[c][i];
+      const T red = p.r[g], green = p.g[g], blue = p.b[g];
+      for (auto& field : lane_sum) std::fill(field, field + kTileSize, T(0));
+      for (int py = box.y0; py <= box.y1; ++py) {
+        const T dy = py + T(0.5) - p.y[g];
+        const ConicRow<T> conic(ca, cb, cc, dy);
+        for (int group = box.group0; group <= box.group1; ++group) {
+          const int first = (py - y_begin) * kTileSize + group * kLaneGroup;
+          const int lane0 = group * kLaneGroup;
+          T *rt = t + first, *rbr = behind[0] + first, *rbg = behind[1] + first,
+            *rbb = behind[2] + first, *rbd = behind_depth + first;
+          const T *rdr = dc[0] + first, *rdg = dc[1] + first,
+                  *rdb = dc[2] + first, *rad = d_acc_depth + first,
+                  *racc = d_accumulated + first, *rfin = t_final + first;
+          const std::uint32_t* rlast = last + first;
+          for (int lane = 0; lane < kLaneGroup; ++lane) {
+            const T dx = lane_x[lane0 + lane] - gx;
+            const PixelAlpha<T> a = EvaluateAlpha(conic, op, dx);
+            // No contribution behind this pixel's last contributor.
+            const T alpha = k < rlast[lane] ? a.alpha : T(0);
+            const T keep = 1 - alpha;
+            // Transmittance before this Gaussian, recovered by division
+            // (alpha <= kMaxAlpha keeps 1 - alpha >= 0.01).
+            const T before = rt[lane] / keep;
+            rt[lane] = before;
+            const T w = alpha * before;
+            // dL/dalpha: this Gaussian's colour and depth against what lies
+            // behind it, and the accumulated alpha's share.
+            T d_alpha_all = racc[lane] * rfin[lane] / keep;
+            d_alpha_all =
+                MulAdd(before * (z - rbd[lane]), rad[lane], d_alpha_all);
+            d_alpha_all =
+                MulAdd(before * (red - rbr[lane]), rdr[lane], d_alpha_all);
+            d_alpha_all =
+                MulAdd(before * (green - rbg[lane]), rdg[lane], d_alpha_all);
+            d_alpha_all =
+                MulAdd(before * (blue - rbb[lane]), rdb[lane], d_alpha_all);
+            T* sum = &lane_sum[0][lane0 + lane];
+            sum[6 * kTileSize] = MulAdd(w, rdr[lane], sum[6 * kTileSize]);
+            sum[7 * kTileSize] = MulAdd(w, rdg[lane], sum[7 * kTileSize]);
+            sum[8 * kTileSize] = MulAdd(w, rdb[lane], sum[8 * kTileSize]);
+            sum[9 * kTileSize] = MulAdd(w, rad[lane], sum[9 * kTileSize]);
+            rbr[lane] = MulAdd(alpha, red, keep * rbr[lane]);
+            rbg[lane] = MulAdd(alpha, green, keep * rbg[lane]);
+            rbb[lane] = MulAdd(alpha, blue, keep * rbb[lane]);
+            rbd[lane] = MulAdd(alpha, z, keep * rbd[lane]);
+            // Only blended pairs pass a gradient to the Gaussian's shape,
+            // and min(kMaxAlpha, .) is flat where it clamps.
+            const T d_alpha = alpha > T(0) ? d_alpha_all : T(0);
+            const T d_raw = a.raw <= T(kMaxAlpha) ? d_alpha : T(0);
+            const T d_power = a.raw * d_raw;
+            sum[5 * kTileSize] = MulAdd(a.gauss, d_raw, sum[5 * kTileSize]);
+            sum[2 * kTileSize] =
+                MulAdd(-T(0.5) * dx * dx, d_power, sum[2 * kTileSize]);
+            sum[3 * kTileSize] = MulAdd(-dx * dy, d_power, sum[3 * kTileSize]);
+            sum[4 * kTileSize] =
+                MulAdd(-T(0.5) * dy * dy, d_power, sum[4 * kTileSize]);
+            sum[0] = MulAdd(MulAdd(ca, dx, cb * dy), d_power, sum[0]);
+            sum[kTileSize] =
+                MulAdd(MulAdd(cc, dy, cb * dx), d_power, sum[kTileSize]);
           }
-          e[9] += w * d_acc_depth[i];
-          behind_depth[i] = alpha * z + (1 - alpha) * behind_depth[i];
-          if (raw > T(kMaxAlpha)) continue;  // min(0.99, .) is flat there
-          const T d_power = raw * d_alpha_i;
-          e[5] += gauss * d_alpha_i;
-          e[2] += -T(0.5) * dx * dx * d_power;
-          e[3] += -dx * dy * d_power;
-          e[4] += -T(0.5) * dy * dy * d_power;
-          e[0] += (ca * dx + cb * dy) * d_power;
-          e[1] += (cc * dy + cb * dx) * d_power;
         }
+      }
+      T* e = &entry_grads_[kPer * static_cast<std::size_t>(k)];
+      for (int f = 0; f < kPer; ++f) {
+        T sum = 0;
+        for (int lane = 0; lane < kTileSize; ++lane) sum += lane_sum[f][lane];
+        e[f] = sum;
       }
     }
   }

@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "src/core/error.h"
-#include "src/render/blend_span.h"
+#include "src/render/blend_kernel.h"
 #include "src/render/rasterizer.h"
 #include "src/render/sh.h"
 
@@ -204,6 +204,10 @@ void RasterizerT<T>::Bin(const RasterCameraT<T>& camera) {
   }
 }
 
+// How many Gaussians the blend processes between checks whether every pixel
+// of a tile has stopped.
+constexpr std::uint32_t kOpenCheckInterval = 16;
+
 template <typename T>
 void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
                            const RasterSettingsT<T>& settings,
@@ -223,63 +227,75 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
   std::uint64_t evaluations = 0;
 
   // Gaussian-major within a tile: each Gaussian, front to back, updates the
-  // pixels of its alpha >= kMinAlpha box. Every pixel still sees its
-  // Gaussians in depth order and stops once transmittance would drop below
-  // kMinTransmittance, exactly as a pixel-major loop, but the pixels a
-  // Gaussian cannot reach are never visited.
+  // rows of its alpha >= kMinAlpha box. Every pixel still sees its Gaussians
+  // in depth order and stops once transmittance would drop below
+  // kMinTransmittance, exactly as a pixel-major loop, but rows a Gaussian
+  // cannot reach are never visited. A row is one branch-free lane loop
+  // (blend_kernel.h): lanes that do not change select their old values.
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     constexpr int kTilePixels = kTileSize * kTileSize;
-    T t[kTilePixels], cr[kTilePixels], cg[kTilePixels], cb[kTilePixels],
-        cd[kTilePixels];
-    std::uint32_t last[kTilePixels];
-    bool done[kTilePixels];
+    // open = 1 while a pixel still blends, 0 once it has stopped (and for
+    // lanes beyond the image's right edge): alpha * open is the alpha a
+    // pixel sees, so done pixels need no branch.
+    alignas(64) T t[kTilePixels], cr[kTilePixels], cg[kTilePixels],
+        cb[kTilePixels], cd[kTilePixels], open[kTilePixels], lane_x[kTileSize];
+    alignas(64) std::uint32_t last[kTilePixels];
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
     const int x_begin = (tile % tiles_x) * kTileSize,
               y_begin = (tile / tiles_x) * kTileSize;
     const int x_end = std::min(x_begin + kTileSize, width),
               y_end = std::min(y_begin + kTileSize, height);
-    int alive = (x_end - x_begin) * (y_end - y_begin);
+    for (int lane = 0; lane < kTileSize; ++lane)
+      lane_x[lane] = x_begin + lane + T(0.5);
     for (int i = 0; i < kTilePixels; ++i) {
       t[i] = T(1.0);
       cr[i] = cg[i] = cb[i] = cd[i] = T(0.0);
       last[i] = begin;
-      done[i] = false;
+      open[i] = x_begin + i % kTileSize < x_end ? T(1) : T(0);
     }
-    for (std::uint32_t k = begin; k < end && alive > 0; ++k) {
+    for (std::uint32_t k = begin; k < end; ++k) {
+      // Once every pixel has stopped the rest of the tile's Gaussians
+      // cannot change it; checked now and then, as the scan costs a row.
+      if ((k - begin) % kOpenCheckInterval == kOpenCheckInterval - 1 &&
+          std::none_of(open, open + kTilePixels, [](T o) { return o > 0; }))
+        break;
       const std::uint32_t g = ids_[k];
-      const T gx = p.x[g], gy = p.y[g];
-      const GaussianSpan<T> span(p, g, x_begin, x_end, y_begin, y_end);
-      const T ca = p.conic_a[g], cbb = p.conic_b[g], cc = p.conic_c[g],
-              op = p.opacity[g];
+      TileBox box;
+      if (!BoxInTile(p, g, x_begin, x_end, y_begin, y_end, &box)) continue;
+      const T gx = p.x[g], op = p.opacity[g];
       const T red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
-      for (int py = span.first_row(); py <= span.last_row(); ++py) {
-        int rx0, rx1;
-        if (!span.Row(py, &rx0, &rx1)) continue;
-        const T dy = py + T(0.5) - gy;
-        const T row = -T(0.5) * cc * dy * dy;
-        for (int px = rx0; px <= rx1; ++px) {
-          const int i = (py - y_begin) * kTileSize + (px - x_begin);
-          if (done[i]) continue;
-          ++evaluations;
-          const T dx = px + T(0.5) - gx;
-          const T power = row - dx * (T(0.5) * ca * dx + cbb * dy);
-          if (power > 0) continue;  // rounding outside the ellipse's domain
-          const T alpha = std::min(T(kMaxAlpha), op * std::exp(power));
-          if (alpha < T(kMinAlpha)) continue;
-          const T next_t = t[i] * (1 - alpha);
-          if (next_t < T(kMinTransmittance)) {
-            done[i] = true;
-            --alive;
-            continue;
+      evaluations += static_cast<std::uint64_t>(box.y1 - box.y0 + 1) *
+                     (box.group1 - box.group0 + 1) * kLaneGroup;
+      for (int py = box.y0; py <= box.y1; ++py) {
+        const ConicRow<T> conic(p.conic_a[g], p.conic_b[g], p.conic_c[g],
+                                py + T(0.5) - p.y[g]);
+        for (int group = box.group0; group <= box.group1; ++group) {
+          const int first = (py - y_begin) * kTileSize + group * kLaneGroup;
+          T *rt = t + first, *rr = cr + first, *rg = cg + first,
+            *rb = cb + first, *rd = cd + first, *ropen = open + first;
+          std::uint32_t* rlast = last + first;
+          const T* rx = lane_x + group * kLaneGroup;
+          for (int lane = 0; lane < kLaneGroup; ++lane) {
+            const T alpha =
+                ropen[lane] * EvaluateAlpha(conic, op, rx[lane] - gx).alpha;
+            const T before = rt[lane];
+            const T next = before * (1 - alpha);
+            // Only a contributing pair can stop a pixel: transmittance
+            // never goes below kMinTransmittance, so alpha = 0 keeps
+            // next = before.
+            const bool stop = next < T(kMinTransmittance);
+            const T w = stop ? T(0) : alpha * before;
+            rr[lane] = MulAdd(w, red, rr[lane]);
+            rg[lane] = MulAdd(w, green, rg[lane]);
+            rb[lane] = MulAdd(w, blue, rb[lane]);
+            rd[lane] = MulAdd(w, z, rd[lane]);
+            rt[lane] = stop ? before : next;
+            // w > 0 exactly when the pair blended (alpha >= kMinAlpha and
+            // transmittance >= kMinTransmittance).
+            rlast[lane] = w > T(0) ? k + 1 : rlast[lane];
+            ropen[lane] = stop ? T(0) : ropen[lane];
           }
-          const T w = alpha * t[i];
-          cr[i] += w * red;
-          cg[i] += w * green;
-          cb[i] += w * blue;
-          cd[i] += w * z;
-          t[i] = next_t;
-          last[i] = k + 1;
         }
       }
     }
