@@ -4,13 +4,14 @@
 # (default 300). A crash, a sanitizer report, an allocation over 512 MB or an
 # input that takes over 10 s stops the run and leaves the input in
 # build-fuzz/ (crash-*, oom-*, timeout-*).
-#   scripts/fuzz.sh [SECONDS] [TARGET...]   targets: npy json (default: all)
+#   scripts/fuzz.sh [SECONDS] [TARGET...]   targets: npy json colmap_binary
+#   colmap_text (default: all)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${1:-300}
 shift || true
 TARGETS=("$@")
-((${#TARGETS[@]})) || TARGETS=(npy json)
+((${#TARGETS[@]})) || TARGETS=(npy json colmap_binary colmap_text)
 
 bash scripts/setup.sh >/dev/null  # the Debian packages the project needs
 source scripts/apt.sh
