@@ -84,37 +84,46 @@ const Preset& GetPreset(const std::string& name) {
 }
 
 Json SynthSummary::ToJson() const {
-  return Json{{"generator", "pano4d synth"},
-              {"preset", preset.name},
-              {"width", preset.width},
-              {"height", preset.height},
-              {"train_frames", preset.train_frames},
-              {"val_frames_per_camera", preset.val_frames},
-              {"seed", seed},
-              {"static", is_static},
-              {"covisibility",
-               {{"resolution", "2x"},
-                {"rule",
-                 "covisible when seen unoccluded in more than threshold "
-                 "training views"},
-                {"threshold", covisibility_threshold},
-                {"val_pixels", val_pixels},
-                {"unseen_pixels", unseen_pixels},
-                {"unseen_fraction", unseen_fraction}}}};
+  Json j{{"generator", "pano4d synth"},
+         {"preset", preset.name},
+         {"width", preset.width},
+         {"height", preset.height},
+         {"train_frames", preset.train_frames},
+         {"val_frames_per_camera", preset.val_frames},
+         {"seed", seed},
+         {"static", is_static},
+         {"covisibility",
+          {{"resolution", "2x"},
+           {"rule",
+            "covisible when seen unoccluded in more than threshold "
+            "training views"},
+           {"threshold", covisibility_threshold},
+           {"val_pixels", val_pixels},
+           {"unseen_pixels", unseen_pixels},
+           {"unseen_fraction", unseen_fraction}}}};
+  // Only when set, so that default scenes keep their bytes.
+  if (dynamic_scale != 1.0) j["dynamic_scale"] = dynamic_scale;
+  return j;
 }
 
 SynthSummary GenerateSynthScene(const SynthOptions& options,
                                 const fs::path& out) {
   const Preset& preset = GetPreset(options.preset);
+  if (!(options.dynamic_scale > 0 && options.dynamic_scale <= 10)) {
+    throw Error("synth", "dynamic_scale", std::to_string(options.dynamic_scale),
+                "must be in (0, 10]");
+  }
   SynthSummary summary;
   summary.preset = preset;
   summary.seed = options.seed;
   summary.is_static = options.is_static;
+  summary.dynamic_scale = options.dynamic_scale;
   EnsureDirectory(out);
   // A rerun replaces everything, so a stale marker must not survive a kill.
   fs::remove(out / "synth.json");
 
-  const Scene scene = BuildScene(options.seed, options.is_static);
+  const Scene scene =
+      BuildScene(options.seed, options.is_static, options.dynamic_scale);
   const double f = kFocalPerWidth * preset.width;
   const Camera intrinsics{CameraModelId::kPinhole,
                           preset.width,

@@ -25,6 +25,7 @@ struct SynthOptions {
   std::string preset = "small";
   std::uint32_t seed = 0;
   bool is_static = false;
+  double dynamic_scale = 1.0;  // see BuildScene; > 0
 };
 
 // What was generated. Written to synth.json without the timings, so the
@@ -33,6 +34,7 @@ struct SynthSummary {
   Preset preset;
   std::uint32_t seed = 0;
   bool is_static = false;
+  double dynamic_scale = 1.0;
   std::int64_t val_pixels = 0;     // 2x validation pixels with a surface
   std::int64_t unseen_pixels = 0;  // of those, not covisible
   double unseen_fraction = 0.0;

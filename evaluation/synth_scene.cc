@@ -140,7 +140,8 @@ bool IntersectBox(const Eigen::Vector3d& half, bool inside,
 
 }  // namespace
 
-Scene BuildScene(std::uint32_t seed, bool is_static) {
+Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
+  const double k = dynamic_scale;
   std::mt19937 rng(seed * 2654435761U + 12345U);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const auto jitter = [&](double amount) {
@@ -202,17 +203,19 @@ Scene BuildScene(std::uint32_t seed, bool is_static) {
       {0.7, 0.7, 0.72}, 1);
 
   // Rigidly moving: a box sliding and turning, a ball bouncing and rolling.
-  Part& slider = scene.parts[add(ShapeKind::kBox, {0.2, 0.2, 0.2},
-                                 {-0.9, 0.3, 0.2}, 0.0, {0.85, 0.3, 0.3}, 2)];
+  Part& slider =
+      scene.parts[add(ShapeKind::kBox, Eigen::Vector3d::Constant(0.2 * k),
+                      {-0.9, 0.3, 0.2 * k}, 0.0, {0.85, 0.3, 0.3}, 2)];
   slider.motion = MotionKind::kSlide;
-  slider.from = Eigen::Vector3d(-0.9 + jitter(0.1), 0.3 + jitter(0.1), 0.2);
-  slider.to = Eigen::Vector3d(0.4 + jitter(0.1), 0.0 + jitter(0.1), 0.2);
+  slider.from = Eigen::Vector3d(-0.9 + jitter(0.1), 0.3 + jitter(0.1), 0.2 * k);
+  slider.to = Eigen::Vector3d(0.4 + jitter(0.1), 0.0 + jitter(0.1), 0.2 * k);
   slider.amplitude = M_PI / 2;
-  Part& ball = scene.parts[add(ShapeKind::kSphere, {0.18, 0.18, 0.18},
-                               {0.9, 1.0, 0.18}, 0, {0.9, 0.8, 0.2}, 0)];
+  Part& ball =
+      scene.parts[add(ShapeKind::kSphere, Eigen::Vector3d::Constant(0.18 * k),
+                      {0.9, 1.0, 0.18 * k}, 0, {0.9, 0.8, 0.2}, 0)];
   ball.motion = MotionKind::kBounce;
-  ball.from = Eigen::Vector3d(1.0 + jitter(0.1), 1.0 + jitter(0.1), 0.18);
-  ball.to = Eigen::Vector3d(0.1 + jitter(0.1), 0.6 + jitter(0.1), 0.18);
+  ball.from = Eigen::Vector3d(1.0 + jitter(0.1), 1.0 + jitter(0.1), 0.18 * k);
+  ball.to = Eigen::Vector3d(0.1 + jitter(0.1), 0.6 + jitter(0.1), 0.18 * k);
   ball.amplitude = 0.5;
   ball.frequency = 2.0;
 
@@ -220,7 +223,7 @@ Scene BuildScene(std::uint32_t seed, bool is_static) {
   // along an arc whose curvature changes; the texture is painted in the
   // straight pose (offset by arc length) and deforms with the bend.
   constexpr int kTubeSpheres = 16;
-  const double length = 1.3, base_radius = 0.11;
+  const double length = 1.3 * k, base_radius = 0.11 * k;
   const Eigen::Vector3d base(1.3 + jitter(0.1), 0.2 + jitter(0.1), 0.0);
   const double tube_yaw = 0.6 + jitter(0.2);
   const int tube_instance = next_instance++;

@@ -61,7 +61,11 @@ struct Scene {
 
 // The built-in scene; `seed` varies placement, sizes and textures. With
 // `is_static` every part stays at one pose (no motion at all).
-Scene BuildScene(std::uint32_t seed, bool is_static);
+// `dynamic_scale` scales the moving objects (size and, for the tube, length)
+// about their footprint on the floor: > 1 makes them cover more of the
+// frame, e.g. to test SfM against large moving objects.
+Scene BuildScene(std::uint32_t seed, bool is_static,
+                 double dynamic_scale = 1.0);
 
 // Poses of all parts at normalised time s.
 struct PartPoses {

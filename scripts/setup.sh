@@ -17,7 +17,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config ccache git
   libeigen3-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev libcli11-dev
   libceres-dev libpcl-dev libflann-dev libtbb-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
   colmap
 )
 

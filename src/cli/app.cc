@@ -23,9 +23,6 @@ struct PlannedCommand {
 };
 
 const std::vector<PlannedCommand> kPlannedCommands = {
-    {"sfm",
-     "Camera poses and sparse points with COLMAP, from a video, images or "
-     "known poses"},
     {"depth",
      "Per-frame depth: from the dataset, or CPU stereo aligned to the sparse "
      "points"},
@@ -90,6 +87,7 @@ int Main(int argc, char** argv) {
   AddSynthCommand(app, &action);
   AddEvalCommand(app, &action);
   AddPlotCommand(app, &action);
+  AddSfmCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

@@ -37,5 +37,6 @@ void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);
 void AddPlotCommand(CLI::App& app, Action* action);
+void AddSfmCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

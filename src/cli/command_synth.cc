@@ -62,6 +62,11 @@ void AddSynthCommand(CLI::App& app, Action* action) {
       ->required();
   sub->add_flag("--static", options->synth.is_static,
                 "Nothing moves (no dynamic objects)");
+  sub->add_option("--dynamic-scale", options->synth.dynamic_scale,
+                  "Scale of the moving objects: > 1 makes them cover more "
+                  "of the frame (e.g. 2.5 to test SfM's dynamic masks)")
+      ->check(CLI::Range(0.1, 10.0))
+      ->capture_default_str();
   sub->callback([action, options] {
     *action = [options] { return RunSynth(*options); };
   });

@@ -1,5 +1,6 @@
 #include "src/cli/app.h"
 
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -59,8 +60,8 @@ TEST(CliTest, VersionAndHelp) {
 }
 
 TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name : {"sfm", "depth", "fit", "expand", "render", "export",
-                           "run", "demo", "make-pairs"}) {
+  for (const char* name : {"depth", "fit", "expand", "render", "export", "run",
+                           "demo", "make-pairs"}) {
     const Result r = RunCli({name, "--workspace", "ws"});
     EXPECT_EQ(r.status, kExitNotBuilt) << name;
     EXPECT_EQ(Lines(r.err), 1) << r.err;
@@ -76,6 +77,27 @@ TEST(CliTest, UsageErrorsExitSixtyFour) {
   EXPECT_EQ(RunCli({"inspect"}).status, kExitUsage);  // missing path
   EXPECT_EQ(RunCli({"bench"}).status, kExitUsage);    // missing bench name
   EXPECT_EQ(RunCli({"--log-level", "loud", "inspect", "x.png"}).status,
+            kExitUsage);
+}
+
+TEST(CliTest, SfmRefusesBadOptionsBeforeRunningAnything) {
+  // No input: one line naming the flags.
+  Result r = RunCli({"sfm", "--workspace", "ws_never_created"});
+  EXPECT_EQ(r.status, kExitError);
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--video/--images/--dataset"), std::string::npos)
+      << r.err;
+  // An unknown camera model names the flag and the value.
+  r = RunCli({"sfm", "--images", PANO4D_SOURCE_DIR, "--workspace",
+              "ws_never_created", "--camera-model", "FISHEYE_9000"});
+  EXPECT_EQ(r.status, kExitError);
+  EXPECT_NE(r.err.find("--camera-model"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("FISHEYE_9000"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists("ws_never_created"));
+  // A matcher colmap does not have is a usage error.
+  EXPECT_EQ(RunCli({"sfm", "--images", PANO4D_SOURCE_DIR, "--workspace", "w",
+                    "--matcher", "vocab_tree"})
+                .status,
             kExitUsage);
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -280,6 +281,9 @@ const StiffCase kStiffCases[] = {
        return m;
      }},
 };
+
+// Names the case in test listings (gtest would print the struct's bytes).
+void PrintTo(const StiffCase& c, std::ostream* os) { *os << c.name; }
 
 class StiffCaseTest : public testing::TestWithParam<StiffCase> {};
 

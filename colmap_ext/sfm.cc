@@ -1,0 +1,518 @@
+#include "colmap_ext/sfm.h"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "colmap_ext/colmap_runner.h"
+#include "colmap_ext/database.h"
+#include "colmap_ext/dynamic_masks.h"
+#include "colmap_ext/model.h"
+#include "src/core/camera.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/log.h"
+#include "src/core/progress.h"
+#include "src/core/timer.h"
+#include "src/core/video.h"
+
+#include <cstdio>
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+const std::set<std::string> kImageExtensions = {".png", ".jpg", ".jpeg",
+                                                ".PNG", ".JPG", ".JPEG"};
+
+// A step's stamp: the inputs it ran with, written once its outputs are
+// complete. A later run skips the step when the stamp says the same inputs
+// (and every earlier step was skipped too); --force ignores stamps.
+class Stamps {
+ public:
+  Stamps(fs::path dir, bool force) : dir_(std::move(dir)), force_(force) {}
+
+  // The seconds the step took when it completed with the same inputs, or
+  // nullopt when it must run (no stamp, other inputs, an earlier step ran,
+  // --force).
+  std::optional<double> Done(const std::string& step,
+                             const nlohmann::json& inputs) {
+    if (force_ || redo_) return std::nullopt;
+    std::ifstream in(dir_ / (step + ".done.json"));
+    const nlohmann::json stamp =
+        nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    if (!stamp.is_object() ||
+        stamp.value("inputs", nlohmann::json()) != inputs ||
+        !stamp.value("seconds", nlohmann::json()).is_number()) {
+      redo_ = true;
+      return std::nullopt;
+    }
+    return stamp["seconds"].get<double>();
+  }
+  void Mark(const std::string& step, const nlohmann::json& inputs,
+            double seconds) {
+    const nlohmann::json stamp = {{"inputs", inputs}, {"seconds", seconds}};
+    WriteFileAtomically(dir_ / (step + ".done.json"), stamp.dump(2) + "\n");
+    redo_ = true;  // everything after a step that ran runs again
+  }
+  void Invalidate() { redo_ = true; }
+
+ private:
+  fs::path dir_;
+  bool force_;
+  bool redo_ = false;
+};
+
+std::vector<fs::path> ListImages(const fs::path& dir) {
+  if (!fs::is_directory(dir))
+    throw Error::In(dir.string(), "not a folder of images");
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.is_regular_file() &&
+        kImageExtensions.count(entry.path().extension().string()))
+      files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty())
+    throw Error::In(dir.string(), "holds no .png or .jpg images");
+  return files;
+}
+
+// The size of a width x height image whose longest side is brought down to
+// max_size (0: unchanged).
+cv::Size ResizedSize(int width, int height, int max_size) {
+  const int longest = std::max(width, height);
+  if (max_size <= 0 || longest <= max_size) return {width, height};
+  const double s = static_cast<double>(max_size) / longest;
+  return {std::max(1, static_cast<int>(std::lround(width * s))),
+          std::max(1, static_cast<int>(std::lround(height * s)))};
+}
+
+cv::Mat Resized(const cv::Mat& bgr, int max_size) {
+  const cv::Size size = ResizedSize(bgr.cols, bgr.rows, max_size);
+  if (size == bgr.size()) return bgr;
+  cv::Mat out;
+  cv::resize(bgr, out, size, 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+// The known frames that --stride and --max-frames keep, with their cameras
+// scaled as the frames are by --max-size.
+std::vector<KnownFrame> KeptKnownFrames(const SfmOptions& o) {
+  std::vector<KnownFrame> kept;
+  for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
+    if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
+      break;
+    KnownFrame frame = o.known[i];
+    const Camera& c = frame.camera.camera;
+    const cv::Size size = ResizedSize(c.width, c.height, o.max_size);
+    frame.camera.camera = c.Rescaled(size.width, size.height);
+    kept.push_back(std::move(frame));
+  }
+  return kept;
+}
+
+// The known cameras as a COLMAP model without points, for
+// point_triangulator, with the image and camera ids that feature_extractor
+// gave each image in `database`. Throws pano4d::Error for a frame the
+// database lacks.
+ColmapModel KnownModel(const std::vector<KnownFrame>& frames,
+                       const fs::path& database) {
+  std::map<std::string, DatabaseImage> by_name;
+  for (const DatabaseImage& image : ReadDatabaseImages(database))
+    by_name[image.name] = image;
+  ColmapModel model;
+  std::set<std::uint32_t> cameras;
+  for (const KnownFrame& frame : frames) {
+    const auto found = by_name.find(frame.name);
+    if (found == by_name.end()) {
+      throw Error(database.string(), "images", frame.name,
+                  "frame missing from the database; rerun with --force");
+    }
+    const DatabaseImage& row = found->second;
+    if (cameras.insert(row.camera_id).second)
+      model.cameras.push_back(FromCamera(row.camera_id, frame.camera.camera));
+    ColmapImage image;
+    image.image_id = row.image_id;
+    image.camera_id = row.camera_id;
+    image.name = frame.name;
+    image.SetCamFromWorld(frame.camera.cam_from_world);
+    model.images.push_back(std::move(image));
+  }
+  model.BuildIndex();
+  return model;
+}
+
+bool SameCamera(const std::vector<KnownFrame>& frames) {
+  for (const KnownFrame& f : frames) {
+    const Camera& a = f.camera.camera;
+    const Camera& b = frames.front().camera.camera;
+    if (a.model_id != b.model_id || a.width != b.width ||
+        a.height != b.height || a.params != b.params)
+      return false;
+  }
+  return true;
+}
+
+// Frames into WS/images as PNG (lossless, and COLMAP reads them), named
+// after the video frame index or kept from the source folder.
+std::vector<std::string> WriteFrames(const SfmOptions& o,
+                                     const fs::path& images_dir) {
+  fs::remove_all(images_dir);
+  EnsureDirectory(images_dir);
+  std::vector<std::string> names;
+  if (!o.video.empty()) {
+    VideoReader reader(o.video,
+                       {.stride = o.stride, .max_frames = o.max_frames});
+    ProgressBar bar("sfm: frames", reader.info().frame_count / o.stride);
+    Image frame;
+    std::int64_t index = 0;
+    while (reader.Next(&frame, &index)) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "frame_%06lld.png",
+                    static_cast<long long>(index));
+      WritePng8(images_dir / name, Resized(frame.ToBgr8(), o.max_size));
+      names.push_back(name);
+      bar.Add();
+    }
+  } else if (!o.known.empty()) {
+    ProgressBar bar("sfm: frames", o.known.size());
+    for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
+      if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
+        break;
+      const cv::Mat bgr = ReadImage(o.known[i].image).ToBgr8();
+      const Camera& camera = o.known[i].camera.camera;
+      if (bgr.cols != camera.width || bgr.rows != camera.height) {
+        throw Error(o.known[i].image.string(), "size",
+                    std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows),
+                    "differs from its camera's " +
+                        std::to_string(camera.width) + "x" +
+                        std::to_string(camera.height));
+      }
+      WritePng8(images_dir / o.known[i].name, Resized(bgr, o.max_size));
+      names.push_back(o.known[i].name);
+      bar.Add(o.stride);
+    }
+  } else {
+    const std::vector<fs::path> files = ListImages(o.images);
+    ProgressBar bar("sfm: frames", files.size());
+    for (std::size_t i = 0; i < files.size(); i += o.stride) {
+      if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
+        break;
+      const Image image = ReadImage(files[i]);
+      const std::string name = files[i].stem().string() + ".png";
+      WritePng8(images_dir / name, Resized(image.ToBgr8(), o.max_size));
+      names.push_back(name);
+      bar.Add(o.stride);
+    }
+  }
+  if (names.size() < 2) {
+    throw Error::In(!o.video.empty()    ? o.video.string()
+                    : !o.images.empty() ? o.images.string()
+                                        : std::string("known frames"),
+                    "gave " + std::to_string(names.size()) +
+                        " frame(s); SfM needs at least 2 (lower --stride)");
+  }
+  return names;
+}
+
+// Moves the model with the most registered images to WS/sparse/0 (the
+// mapper numbers models in the order it found them).
+int SelectLargestModel(const fs::path& sparse, int* models) {
+  std::vector<std::pair<std::size_t, fs::path>> found;
+  if (fs::is_directory(sparse)) {
+    for (const auto& entry : fs::directory_iterator(sparse)) {
+      if (entry.is_directory() && DetectModelFormat(entry.path()))
+        found.emplace_back(ReadModel(entry.path()).images.size(), entry.path());
+    }
+  }
+  *models = static_cast<int>(found.size());
+  if (found.empty()) return 0;
+  const auto largest = std::max_element(
+      found.begin(), found.end(),
+      [](const auto& a, const auto& b) { return a.first < b.first; });
+  if (largest->second.filename() != "0") {
+    const fs::path zero = sparse / "0", swap = sparse / "0.swap";
+    fs::rename(zero, swap);
+    fs::rename(largest->second, zero);
+    fs::rename(swap, largest->second);
+  }
+  return static_cast<int>(largest->first);
+}
+
+}  // namespace
+
+void SfmOptions::Check() const {
+  if (!video.empty() + !images.empty() + !known.empty() != 1) {
+    throw Error("sfm", "--video/--images/--dataset", "",
+                "give exactly one of them");
+  }
+  for (const KnownFrame& frame : known) {
+    frame.camera.camera.Check(frame.image.string());
+    if (fs::path(frame.name).extension() != ".png")
+      throw Error("sfm", "known frame name", frame.name, "must end in .png");
+  }
+  if (workspace.empty()) throw Error("sfm", "--workspace", "", "required");
+  if (!CameraModelFromName(camera_model)) {
+    throw Error("sfm", "--camera-model", camera_model,
+                "not a COLMAP camera model (e.g. SIMPLE_RADIAL, OPENCV, "
+                "PINHOLE)");
+  }
+  if (!matcher.empty() && matcher != "sequential" && matcher != "exhaustive")
+    throw Error("sfm", "--matcher", matcher,
+                "expected sequential or exhaustive");
+  if (stride < 1)
+    throw Error("sfm", "--stride", std::to_string(stride), "must be >= 1");
+  if (max_frames < 0)
+    throw Error("sfm", "--max-frames", std::to_string(max_frames),
+                "must be >= 0");
+  if (max_size < 0)
+    throw Error("sfm", "--max-size", std::to_string(max_size), "must be >= 0");
+}
+
+SfmReport RunSfm(const SfmOptions& o) {
+  o.Check();
+  const ColmapRunner colmap(o.colmap);
+  const fs::path ws = o.workspace, logs = ws / "pano4d" / "logs";
+  const fs::path images_dir = ws / "images", masks_dir = ws / "masks";
+  const fs::path database = ws / "database.db", sparse = ws / "sparse";
+  EnsureDirectory(logs);
+  Stamps stamps(logs, o.force);
+  SfmReport report;
+  nlohmann::json timings = nlohmann::json::object();
+  // Runs a step unless an earlier run completed it with the same inputs and
+  // its outputs are still there.
+  const auto step = [&](const std::string& name, const nlohmann::json& inputs,
+                        const std::function<bool()>& outputs_exist,
+                        const std::function<void()>& run) {
+    Timer timer;
+    std::optional<double> earlier = stamps.Done(name, inputs);
+    if (earlier && !outputs_exist()) {
+      stamps.Invalidate();
+      earlier.reset();
+    }
+    if (earlier) {
+      PANO4D_LOG(kInfo) << "sfm: " << name << ": complete from an earlier run";
+    } else {
+      PANO4D_LOG(kInfo) << "sfm: " << name << " ...";
+      run();
+      stamps.Mark(name, inputs, timer.WallSeconds());
+    }
+    const double seconds = earlier.value_or(timer.WallSeconds());
+    report.steps.push_back({name, seconds, earlier.has_value()});
+    timings[name] = {{"seconds", seconds}, {"skipped", earlier.has_value()}};
+  };
+  const auto exists = [](const fs::path& path) {
+    return [path] { return fs::exists(path); };
+  };
+
+  // 1. Frames.
+  const nlohmann::json frame_inputs = {
+      {"video", o.video.empty() ? "" : fs::absolute(o.video).string()},
+      {"images", o.images.empty() ? "" : fs::absolute(o.images).string()},
+      {"stride", o.stride},
+      {"max_frames", o.max_frames},
+      {"max_size", o.max_size}};
+  step("frames", frame_inputs, exists(images_dir),
+       [&] { WriteFrames(o, images_dir); });
+  std::vector<fs::path> frames = ListImages(images_dir);
+  report.frames = static_cast<int>(frames.size());
+
+  // 2. Dynamic masks (COLMAP's convention in WS/masks, pano4d's in
+  // WS/pano4d/tracks/dynamic).
+  if (o.dynamic_masks) {
+    step("dynamic_masks", {{"frames", report.frames}}, exists(masks_dir), [&] {
+      std::vector<cv::Mat> bgr;
+      std::vector<std::string> names;
+      for (const fs::path& f : frames) {
+        bgr.push_back(ReadImage(f).ToBgr8());
+        names.push_back(f.filename().string());
+      }
+      DynamicMaskStats stats;
+      const std::vector<cv::Mat> masks = ComputeDynamicMasks(bgr, {}, &stats);
+      fs::remove_all(masks_dir);
+      WriteColmapMasks(masks, names, masks_dir);
+      WriteDynamicMasks(masks, names, ws / "pano4d" / "tracks" / "dynamic");
+      PANO4D_LOG(kInfo) << "sfm: " << stats.BriefReport();
+      report.mean_dynamic_fraction = stats.MeanDynamicFraction();
+    });
+  }
+
+  if (o.dynamic_masks && report.steps.back().skipped) {
+    // Masks from an earlier run: their fraction, from the files.
+    double sum = 0;
+    for (const fs::path& f : frames) {
+      const cv::Mat mask = ReadMask(MaskPathFor(
+          ws / "pano4d" / "tracks" / "dynamic", f.filename().string()));
+      sum += cv::countNonZero(mask) / static_cast<double>(mask.total());
+    }
+    report.mean_dynamic_fraction = sum / frames.size();
+  }
+
+  // 3. Features (SIFT on the CPU), 4. matches, 5. mapper.
+  const std::string matcher =
+      !o.matcher.empty() ? o.matcher
+                         : (!o.video.empty() ? "sequential" : "exhaustive");
+  const std::vector<KnownFrame> known = KeptKnownFrames(o);
+  const bool known_shared = !known.empty() && SameCamera(known);
+  const std::string camera_model =
+      known.empty() ? o.camera_model
+                    : std::string(known.front().camera.camera.info().name);
+  const bool single_camera = known.empty() ? o.single_camera : known_shared;
+  const fs::path image_list = ws / "pano4d" / "image_list.txt";
+  step("feature_extractor",
+       {{"camera_model", camera_model},
+        {"single_camera", single_camera},
+        {"masks", o.dynamic_masks},
+        {"known", !known.empty()}},
+       exists(database), [&] {
+         fs::remove(database);
+         std::vector<std::string> args = {"--database_path",
+                                          database.string(),
+                                          "--image_path",
+                                          images_dir.string(),
+                                          "--ImageReader.camera_model",
+                                          camera_model,
+                                          "--ImageReader.single_camera",
+                                          single_camera ? "1" : "0",
+                                          "--SiftExtraction.use_gpu",
+                                          "0"};
+         if (o.dynamic_masks) {
+           args.insert(args.end(),
+                       {"--ImageReader.mask_path", masks_dir.string()});
+         }
+         if (!known.empty()) {
+           // Database ids in our order; the known camera where it is shared.
+           std::string list;
+           for (const KnownFrame& f : known) list += f.name + "\n";
+           WriteFileAtomically(image_list, list);
+           args.insert(args.end(), {"--image_list_path", image_list.string()});
+           if (known_shared) {
+             std::string params;
+             for (const double p : known.front().camera.camera.params) {
+               char buffer[32];
+               std::snprintf(buffer, sizeof(buffer), "%.17g", p);
+               if (!params.empty()) params += ',';
+               params += buffer;
+             }
+             args.insert(args.end(), {"--ImageReader.camera_params", params});
+           }
+         }
+         colmap.Run("feature_extractor", args, logs / "feature_extractor.log",
+                    "check that the frames are readable images");
+       });
+  step(matcher + "_matcher", {{"matcher", matcher}}, exists(database), [&] {
+    colmap.Run(
+        matcher + "_matcher",
+        {"--database_path", database.string(), "--SiftMatching.use_gpu", "0"},
+        logs / (matcher + "_matcher.log"),
+        "out of memory on many images: use --matcher sequential");
+  });
+  if (!known.empty()) {
+    step(
+        "point_triangulator", {{"frames", report.frames}},
+        [&] { return DetectModelFormat(sparse / "0").has_value(); },
+        [&] {
+          const fs::path input = ws / "pano4d" / "known_model";
+          fs::remove_all(input);
+          WriteModel(KnownModel(known, database), input, ColmapFormat::kText);
+          fs::remove_all(sparse);
+          EnsureDirectory(sparse / "0");
+          // The poses and intrinsics are given: only points are estimated.
+          colmap.Run("point_triangulator",
+                     {"--database_path", database.string(), "--image_path",
+                      images_dir.string(), "--input_path", input.string(),
+                      "--output_path", (sparse / "0").string(),
+                      "--Mapper.ba_refine_focal_length", "0",
+                      "--Mapper.ba_refine_principal_point", "0",
+                      "--Mapper.ba_refine_extra_params", "0"},
+                     logs / "point_triangulator.log",
+                     "too few matches between frames with known poses: lower "
+                     "--stride, or try --matcher exhaustive");
+        });
+  } else {
+    step(
+        "mapper", {{"frames", report.frames}},
+        [&] { return DetectModelFormat(sparse / "0").has_value(); },
+        [&] {
+          fs::remove_all(sparse);
+          EnsureDirectory(sparse);
+          colmap.Run("mapper",
+                     {"--database_path", database.string(), "--image_path",
+                      images_dir.string(), "--output_path", sparse.string()},
+                     logs / "mapper.log",
+                     "too few matches: frames need texture and overlap (lower "
+                     "--stride, or try --matcher exhaustive)");
+          int models = 0;
+          if (SelectLargestModel(sparse, &models) == 0) {
+            throw Error(
+                "colmap", "mapper", "",
+                "produced no model (log: " + (logs / "mapper.log").string() +
+                    "); likely remedy: the frames do not overlap enough or "
+                    "lack texture: lower --stride, or try --matcher "
+                    "exhaustive");
+          }
+        });
+  }
+  int models = 0;
+  SelectLargestModel(sparse, &models);
+  report.models = models;
+  report.model = sparse / "0";
+  report.images = images_dir;
+
+  // 6. Undistortion, so that later stages see pinhole cameras.
+  const ColmapModel mapped = ReadModel(report.model);
+  const bool distorted = std::any_of(
+      mapped.cameras.begin(), mapped.cameras.end(), [](const ColmapCamera& c) {
+        return c.model_id != static_cast<int>(CameraModelId::kSimplePinhole) &&
+               c.model_id != static_cast<int>(CameraModelId::kPinhole);
+      });
+  if (distorted) {
+    const fs::path out = ws / "pano4d" / "undistorted";
+    step(
+        "image_undistorter", {{"model_images", mapped.images.size()}},
+        [&] { return DetectModelFormat(out / "sparse").has_value(); },
+        [&] {
+          fs::remove_all(out);
+          colmap.Run("image_undistorter",
+                     {"--image_path", images_dir.string(), "--input_path",
+                      report.model.string(), "--output_path", out.string(),
+                      "--output_type", "COLMAP"},
+                     logs / "image_undistorter.log",
+                     "check free disk space in the workspace");
+        });
+    report.model = out / "sparse";
+    report.images = out / "images";
+  }
+
+  const ColmapModel model = ReadModel(report.model);
+  report.registered = static_cast<int>(model.images.size());
+  report.points3D = static_cast<int>(model.points3D.size());
+  double error_sum = 0;
+  for (const ColmapPoint3D& p : model.points3D) error_sum += p.error;
+  report.mean_reprojection_error =
+      model.points3D.empty() ? 0.0 : error_sum / model.points3D.size();
+
+  nlohmann::json summary = {
+      {"frames", report.frames},
+      {"registered", report.registered},
+      {"points3D", report.points3D},
+      {"mean_reprojection_error_px", report.mean_reprojection_error},
+      {"models", report.models},
+      {"model", fs::relative(report.model, ws).string()},
+      {"images", fs::relative(report.images, ws).string()},
+      {"camera_model", o.camera_model},
+      {"matcher", matcher},
+      {"dynamic_masks", o.dynamic_masks},
+      {"mean_dynamic_fraction", report.mean_dynamic_fraction}};
+  WriteFileAtomically(ws / "pano4d" / "sfm.json", summary.dump(2) + "\n");
+  WriteFileAtomically(logs / "timings.json", timings.dump(2) + "\n");
+  return report;
+}
+
+}  // namespace pano4d
