@@ -163,6 +163,20 @@ bool SameCamera(const std::vector<KnownFrame>& frames) {
 // after the video frame index or kept from the source folder.
 std::vector<std::string> WriteFrames(const SfmOptions& o,
                                      const fs::path& images_dir) {
+  std::error_code error;
+  if (!o.images.empty() && fs::equivalent(o.images, images_dir, error)) {
+    // An existing COLMAP workspace: its images are the frames, as they are.
+    if (o.stride != 1 || o.max_frames != 0 || o.max_size != 0) {
+      throw Error("sfm", "--images", o.images.string(),
+                  "is the workspace's own images folder, which "
+                  "--stride/--max-frames/--max-size would overwrite; give "
+                  "another folder");
+    }
+    std::vector<std::string> names;
+    for (const fs::path& f : ListImages(images_dir))
+      names.push_back(f.filename().string());
+    return names;
+  }
   fs::remove_all(images_dir);
   EnsureDirectory(images_dir);
   std::vector<std::string> names;
@@ -317,7 +331,13 @@ SfmReport RunSfm(const SfmOptions& o) {
       {"images", o.images.empty() ? "" : fs::absolute(o.images).string()},
       {"stride", o.stride},
       {"max_frames", o.max_frames},
-      {"max_size", o.max_size}};
+      {"max_size", o.max_size},
+      {"known", [&] {
+         nlohmann::json images = nlohmann::json::array();
+         for (const KnownFrame& f : o.known)
+           images.push_back(fs::absolute(f.image).string());
+         return images;
+       }()}};
   step("frames", frame_inputs, exists(images_dir),
        [&] { WriteFrames(o, images_dir); });
   std::vector<fs::path> frames = ListImages(images_dir);

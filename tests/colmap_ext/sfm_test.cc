@@ -12,6 +12,7 @@
 #include "colmap_ext/model.h"
 #include "evaluation/dataset.h"
 #include "evaluation/synth_generate.h"
+#include "src/core/error.h"
 #include "src/core/file.h"
 #include "tests/support/test_files.h"
 
@@ -115,6 +116,19 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
+}
+
+TEST_F(SfmTest, AWorkspacesOwnImagesAreNeverOverwritten) {
+  testing::TempDir dir;
+  EnsureDirectory(dir / "ws" / "images");
+  fs::copy_file(dir_->path() / "train" / "0_00000.png",
+                dir / "ws" / "images" / "0_00000.png");
+  SfmOptions options;
+  options.images = dir / "ws" / "images";
+  options.workspace = dir / "ws";
+  options.max_size = 100;  // would rewrite the input
+  EXPECT_THROW(RunSfm(options), Error);
+  EXPECT_TRUE(fs::exists(dir / "ws" / "images" / "0_00000.png"));
 }
 
 TEST_F(SfmTest, KnownPosesAreKeptAndTriangulated) {
