@@ -1,0 +1,145 @@
+#include "src/gs/adam.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+
+void AdamOptions::Check() const {
+  if (!(beta1 >= 0 && beta1 < 1))
+    throw Error("adam", "beta1", std::to_string(beta1), "must be in [0, 1)");
+  if (!(beta2 >= 0 && beta2 < 1))
+    throw Error("adam", "beta2", std::to_string(beta2), "must be in [0, 1)");
+  if (!(epsilon > 0))
+    throw Error("adam", "epsilon", std::to_string(epsilon), "must be > 0");
+}
+
+Adam::Adam(AdamOptions options) : options_(options) { options_.Check(); }
+
+int Adam::AddGroup(std::string name, std::vector<float>* params, int width,
+                   double lr) {
+  if (params == nullptr || width <= 0 || params->size() % width != 0) {
+    throw Error(
+        "adam", name, std::to_string(params ? params->size() : 0),
+        "parameters must be rows of " + std::to_string(width) + " floats");
+  }
+  const std::int64_t rows = static_cast<std::int64_t>(params->size()) / width;
+  if (!groups_.empty() && rows != rows_) {
+    throw Error("adam", name, std::to_string(rows) + " rows",
+                "the other groups have " + std::to_string(rows_));
+  }
+  rows_ = rows;
+  groups_.push_back({std::move(name), params, width, lr,
+                     std::vector<float>(params->size(), 0.0f),
+                     std::vector<float>(params->size(), 0.0f)});
+  return static_cast<int>(groups_.size()) - 1;
+}
+
+void Adam::SetLearningRate(int group, double lr) { groups_.at(group).lr = lr; }
+
+void Adam::CheckSizes() const {
+  for (const Group& g : groups_) {
+    if (static_cast<std::int64_t>(g.params->size()) != rows_ * g.width ||
+        g.m.size() != g.params->size()) {
+      throw Error("adam", g.name, std::to_string(g.params->size()),
+                  "parameters changed size without AppendRows/KeepRows (" +
+                      std::to_string(rows_) + " rows expected)");
+    }
+  }
+}
+
+AdamStepStats Adam::Step(
+    const std::vector<const std::vector<float>*>& gradients) {
+  if (gradients.size() != groups_.size()) {
+    throw Error(
+        "adam", "gradients", std::to_string(gradients.size()),
+        "expected one per group (" + std::to_string(groups_.size()) + ")");
+  }
+  CheckSizes();
+  ++step_;
+  const double b1 = options_.beta1, b2 = options_.beta2;
+  const double correction1 = 1 - std::pow(b1, static_cast<double>(step_));
+  const double correction2 = 1 - std::pow(b2, static_cast<double>(step_));
+  AdamStepStats stats;
+  for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+    Group& g = groups_[gi];
+    const std::vector<float>* grad = gradients[gi];
+    if (grad == nullptr || grad->empty()) continue;
+    if (grad->size() != g.params->size()) {
+      throw Error("adam", g.name + " gradient", std::to_string(grad->size()),
+                  "expected " + std::to_string(g.params->size()) + " values");
+    }
+    const double step_size = g.lr / correction1;
+    const double root_correction2 = std::sqrt(correction2);
+    std::vector<float>& p = *g.params;
+    std::int64_t skipped = 0;
+#pragma omp parallel for schedule(static) reduction(+ : skipped)
+    for (std::int64_t row = 0; row < rows_; ++row) {
+      const std::size_t begin = static_cast<std::size_t>(row) * g.width;
+      bool finite = true;
+      for (int k = 0; k < g.width; ++k)
+        finite = finite && std::isfinite((*grad)[begin + k]);
+      if (!finite) {
+        ++skipped;
+        continue;
+      }
+      for (int k = 0; k < g.width; ++k) {
+        const std::size_t i = begin + k;
+        const double gradient = (*grad)[i];
+        const double m = b1 * g.m[i] + (1 - b1) * gradient;
+        const double v = b2 * g.v[i] + (1 - b2) * gradient * gradient;
+        g.m[i] = static_cast<float>(m);
+        g.v[i] = static_cast<float>(v);
+        p[i] -= static_cast<float>(
+            step_size * m /
+            (std::sqrt(v) / root_correction2 + options_.epsilon));
+      }
+    }
+    stats.skipped_rows += skipped;
+  }
+  return stats;
+}
+
+void Adam::AppendRows(std::int64_t count) {
+  rows_ += count;
+  for (Group& g : groups_) {
+    g.m.resize(static_cast<std::size_t>(rows_) * g.width, 0.0f);
+    g.v.resize(static_cast<std::size_t>(rows_) * g.width, 0.0f);
+  }
+  CheckSizes();
+}
+
+void Adam::KeepRows(const std::vector<std::uint8_t>& keep) {
+  if (static_cast<std::int64_t>(keep.size()) != rows_) {
+    throw Error("adam", "keep", std::to_string(keep.size()),
+                "expected one flag per row (" + std::to_string(rows_) + ")");
+  }
+  const std::int64_t kept =
+      std::count_if(keep.begin(), keep.end(), [](std::uint8_t k) { return k; });
+  for (Group& g : groups_) {
+    std::size_t out = 0;
+    for (std::int64_t row = 0; row < rows_; ++row) {
+      if (!keep[row]) continue;
+      for (int k = 0; k < g.width; ++k, ++out) {
+        g.m[out] = g.m[row * g.width + k];
+        g.v[out] = g.v[row * g.width + k];
+      }
+    }
+    g.m.resize(out);
+    g.v.resize(out);
+  }
+  rows_ = kept;
+  CheckSizes();
+}
+
+double ExponentialLearningRate(double lr_init, double lr_final,
+                               std::int64_t step, std::int64_t max_steps) {
+  if (max_steps <= 0 || step >= max_steps) return lr_final;
+  if (step <= 0) return lr_init;
+  const double t = static_cast<double>(step) / static_cast<double>(max_steps);
+  return std::exp(std::log(lr_init) * (1 - t) + std::log(lr_final) * t);
+}
+
+}  // namespace pano4d
