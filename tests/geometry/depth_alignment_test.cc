@@ -1,0 +1,83 @@
+#include "src/geometry/depth_alignment.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+namespace {
+
+// A depth map d = (z - b) / s of a tilted plane, sampled at random pixels.
+struct Scene {
+  cv::Mat depth;
+  std::vector<DepthSample> samples;
+};
+Scene MakeScene(double scale, double shift, double outlier_fraction,
+                unsigned seed) {
+  Scene s;
+  s.depth.create(60, 80, CV_32F);
+  auto true_z = [](int u, int v) { return 2.0 + 0.03 * u + 0.02 * v; };
+  for (int v = 0; v < 60; ++v)
+    for (int u = 0; u < 80; ++u)
+      s.depth.at<float>(v, u) =
+          static_cast<float>((true_z(u, v) - shift) / scale);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> pu(0, 80), pv(0, 60), unit(0, 1);
+  std::normal_distribution<double> noise(0, 0.005);
+  for (int i = 0; i < 300; ++i) {
+    DepthSample d;
+    d.pixel = {pu(rng), pv(rng)};
+    const int u = static_cast<int>(d.pixel.x()),
+              v = static_cast<int>(d.pixel.y());
+    d.z = true_z(u, v) * (1 + noise(rng));
+    if (unit(rng) < outlier_fraction) d.z *= 0.3 + 2 * unit(rng);  // movers
+    s.samples.push_back(d);
+  }
+  return s;
+}
+
+TEST(DepthAlignmentTest, RecoversScaleAndShiftDespiteOutliers) {
+  const Scene s = MakeScene(2.5, 0.3, 0.25, 1);
+  const DepthAlignment a = AlignDepth(s.depth, s.samples);
+  EXPECT_NEAR(a.scale, 2.5, 0.025);
+  EXPECT_NEAR(a.shift, 0.3, 0.03);
+  EXPECT_EQ(a.samples, 300);
+  EXPECT_GT(a.inliers, 200);
+  EXPECT_LT(a.median_relative_error, 0.01);
+}
+
+TEST(DepthAlignmentTest, PlainLeastSquaresWouldBeFarOff) {
+  // The same data fitted without the robust loss: a check that the outliers
+  // matter, so the test above shows the loss doing its job.
+  const Scene s = MakeScene(2.5, 0.3, 0.25, 1);
+  const DepthAlignment robust = AlignDepth(s.depth, s.samples);
+  const DepthAlignment plain =
+      AlignDepth(s.depth, s.samples, {.robust_scale = 1e6});
+  EXPECT_GT(std::abs(plain.scale - 2.5), 5 * std::abs(robust.scale - 2.5));
+}
+
+TEST(DepthAlignmentTest, InvalidDepthAndPixelsAreSkipped) {
+  Scene s = MakeScene(1.0, 0.0, 0.0, 2);
+  s.depth(cv::Rect(0, 0, 40, 60)).setTo(0.0f);  // left half: no depth
+  s.samples.push_back({{-5, 3}, 2.0});          // outside the map
+  s.samples.push_back({{5, 3}, std::nan("")});  // no SfM depth
+  const DepthAlignment a = AlignDepth(s.depth, s.samples);
+  EXPECT_LT(a.samples, 200);
+  EXPECT_NEAR(a.scale, 1.0, 0.01);
+}
+
+TEST(DepthAlignmentTest, DegenerateInputsAreErrors) {
+  Scene s = MakeScene(1.0, 0.0, 0.0, 3);
+  s.samples.resize(5);
+  EXPECT_THROW(AlignDepth(s.depth, s.samples), Error);  // too few
+  s = MakeScene(1.0, 0.0, 0.0, 3);
+  s.depth.setTo(3.0f);
+  EXPECT_THROW(AlignDepth(s.depth, s.samples), Error);  // constant depth
+  EXPECT_THROW(AlignDepth(cv::Mat(), s.samples), Error);
+  EXPECT_THROW(AlignDepth(s.depth, s.samples, {.robust_scale = 0}), Error);
+}
+
+}  // namespace
+}  // namespace pano4d
