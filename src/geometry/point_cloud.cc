@@ -1,0 +1,106 @@
+#include "src/geometry/point_cloud.h"
+
+#include <cmath>
+#include <string>
+
+#include "src/core/error.h"
+#include "src/geometry/pcl_bridge.h"
+
+namespace pano4d {
+
+// The bridge takes points as packed float triples.
+static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+
+PointCloud UnprojectDepth(const cv::Mat& depth, const cv::Mat& rgb,
+                          const PosedCamera& camera, int stride) {
+  const Camera& c = camera.camera;
+  if (depth.type() != CV_32FC1 || depth.cols != c.width ||
+      depth.rows != c.height) {
+    throw Error("unproject", "depth",
+                std::to_string(depth.cols) + "x" + std::to_string(depth.rows),
+                "expected a CV_32F map of the camera's size " +
+                    std::to_string(c.width) + "x" + std::to_string(c.height));
+  }
+  if (!rgb.empty() && (rgb.type() != CV_32FC3 || rgb.size() != depth.size()))
+    throw Error("unproject", "rgb", "",
+                "expected CV_32FC3 of the depth's size");
+  if (stride < 1)
+    throw Error("unproject", "stride", std::to_string(stride), "must be >= 1");
+  PointCloud cloud;
+  const Rigid3d world_from_cam = camera.cam_from_world.Inverse();
+  for (int v = 0; v < depth.rows; v += stride) {
+    for (int u = 0; u < depth.cols; u += stride) {
+      const float z = depth.at<float>(v, u);
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      const UnprojectResult r = c.Unproject({u + 0.5, v + 0.5});
+      if (!r.ok()) continue;
+      // The ray has unit length; z-depth scales it by z / ray.z.
+      const Eigen::Vector3d point_cam = r.ray * (z / r.ray.z());
+      cloud.points.push_back((world_from_cam * point_cam).cast<float>());
+      if (!rgb.empty()) {
+        const cv::Vec3f& color = rgb.at<cv::Vec3f>(v, u);
+        cloud.colors.emplace_back(color[0], color[1], color[2]);
+      }
+    }
+  }
+  return cloud;
+}
+
+void PointCloudFilterOptions::Check() const {
+  if (neighbours < 0)
+    throw Error("point cloud filter", "neighbours", std::to_string(neighbours),
+                "must be >= 0");
+  if (!(std_ratio > 0))
+    throw Error("point cloud filter", "std_ratio", std::to_string(std_ratio),
+                "must be > 0");
+  if (!(voxel_size >= 0))
+    throw Error("point cloud filter", "voxel_size", std::to_string(voxel_size),
+                "must be >= 0");
+}
+
+PointCloud FilterPointCloud(const PointCloud& cloud,
+                            const PointCloudFilterOptions& options) {
+  options.Check();
+  const bool colored = cloud.colors.size() == cloud.size();
+  PointCloud current = cloud;
+  if (options.neighbours > 0 &&
+      static_cast<int>(current.size()) > options.neighbours) {
+    const std::vector<std::uint8_t> keep = pcl_bridge::StatisticalOutlierMask(
+        current.points.front().data(), current.size(), options.neighbours,
+        options.std_ratio);
+    PointCloud kept;
+    for (std::size_t i = 0; i < current.size(); ++i) {
+      if (!keep[i]) continue;
+      kept.points.push_back(current.points[i]);
+      if (colored) kept.colors.push_back(current.colors[i]);
+    }
+    current = std::move(kept);
+  }
+  if (options.voxel_size > 0 && current.size() > 0) {
+    std::vector<float> xyz, rgb;
+    pcl_bridge::VoxelGrid(current.points.front().data(),
+                          colored ? current.colors.front().data() : nullptr,
+                          current.size(),
+                          static_cast<float>(options.voxel_size), &xyz, &rgb);
+    PointCloud thinned;
+    for (std::size_t i = 0; i < xyz.size() / 3; ++i) {
+      thinned.points.emplace_back(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+      if (colored)
+        thinned.colors.emplace_back(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+    }
+    current = std::move(thinned);
+  }
+  return current;
+}
+
+std::vector<float> MeanNeighbourDistance(const PointCloud& cloud, int k) {
+  if (k < 1)
+    throw Error("neighbour distance", "k", std::to_string(k), "must be >= 1");
+  std::vector<float> out(cloud.size(), 0.0f);
+  if (cloud.size() < 2) return out;
+  pcl_bridge::MeanNeighbourDistance(cloud.points.front().data(), cloud.size(),
+                                    k, out.data());
+  return out;
+}
+
+}  // namespace pano4d
