@@ -235,17 +235,24 @@ std::vector<std::string> WriteFrames(const SfmOptions& o,
   return names;
 }
 
-// Moves the model with the most registered images to WS/sparse/0 (the
-// mapper numbers models in the order it found them).
-int SelectLargestModel(const fs::path& sparse, int* models) {
-  std::vector<std::pair<std::size_t, fs::path>> found;
-  if (fs::is_directory(sparse)) {
-    for (const auto& entry : fs::directory_iterator(sparse)) {
-      if (entry.is_directory() && DetectModelFormat(entry.path()))
-        found.emplace_back(ReadModel(entry.path()).images.size(), entry.path());
-    }
+// The folders of WS/sparse that hold a complete model.
+std::vector<fs::path> ModelFolders(const fs::path& sparse) {
+  std::vector<fs::path> folders;
+  if (!fs::is_directory(sparse)) return folders;
+  for (const auto& entry : fs::directory_iterator(sparse)) {
+    if (entry.is_directory() && DetectModelFormat(entry.path()))
+      folders.push_back(entry.path());
   }
-  *models = static_cast<int>(found.size());
+  return folders;
+}
+
+// Moves the model with the most registered images to WS/sparse/0 (the
+// mapper numbers models in the order it found them) and returns that
+// count; 0 when the mapper produced no model.
+int SelectLargestModel(const fs::path& sparse) {
+  std::vector<std::pair<std::size_t, fs::path>> found;
+  for (const fs::path& folder : ModelFolders(sparse))
+    found.emplace_back(ReadModel(folder).images.size(), folder);
   if (found.empty()) return 0;
   const auto largest = std::max_element(
       found.begin(), found.end(),
@@ -468,8 +475,7 @@ SfmReport RunSfm(const SfmOptions& o) {
                      logs / "mapper.log",
                      "too few matches: frames need texture and overlap (lower "
                      "--stride, or try --matcher exhaustive)");
-          int models = 0;
-          if (SelectLargestModel(sparse, &models) == 0) {
+          if (SelectLargestModel(sparse) == 0) {
             throw Error(
                 "colmap", "mapper", "",
                 "produced no model (log: " + (logs / "mapper.log").string() +
@@ -479,9 +485,7 @@ SfmReport RunSfm(const SfmOptions& o) {
           }
         });
   }
-  int models = 0;
-  SelectLargestModel(sparse, &models);
-  report.models = models;
+  report.models = static_cast<int>(ModelFolders(sparse).size());
   report.model = sparse / "0";
   report.images = images_dir;
 

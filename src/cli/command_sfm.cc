@@ -33,11 +33,11 @@ void CompareWithDataset(const fs::path& model_dir, const fs::path& root,
   const ColmapModel model = ReadModel(model_dir);
   const Dataset dataset = LoadDataset(root);
   std::vector<Rigid3d> estimate, reference;
+  // `pano4d sfm` names every frame <stem>.png.
   for (const auto* split : {&dataset.train, &dataset.val}) {
     for (const DatasetFrame& frame : *split) {
-      for (const ColmapImage& image : model.images) {
-        if (fs::path(image.name).stem().string() != frame.id) continue;
-        estimate.push_back(image.CamFromWorld(model_dir.string()));
+      if (const ColmapImage* image = model.FindImageByName(frame.id + ".png")) {
+        estimate.push_back(image->CamFromWorld(model_dir.string()));
         reference.push_back(frame.camera.cam_from_world);
       }
     }

@@ -83,6 +83,24 @@ inline PixelAlpha<T> EvaluateAlpha(const ConicRow<T>& row, T opacity, T dx) {
   return {gauss, raw, raw >= T(kMinAlpha) ? std::min(T(kMaxAlpha), raw) : T(0)};
 }
 
+// Tile `tile` of a width x height image in kTileSize tiles, row-major: its
+// pixels [x_begin, x_end) x [y_begin, y_end) (clipped at the right and
+// bottom edges) and the x of each lane's pixel centre. Forward and backward
+// walk tiles through this, so they agree on every pixel.
+template <typename T>
+struct TileRect {
+  TileRect(int tile, int tiles_x, int width, int height)
+      : x_begin((tile % tiles_x) * kTileSize),
+        y_begin((tile / tiles_x) * kTileSize),
+        x_end(std::min(x_begin + kTileSize, width)),
+        y_end(std::min(y_begin + kTileSize, height)) {
+    for (int lane = 0; lane < kTileSize; ++lane)
+      lane_x[lane] = x_begin + lane + T(0.5);
+  }
+  int x_begin, y_begin, x_end, y_end;
+  alignas(64) T lane_x[kTileSize];
+};
+
 // Lanes are processed in groups of this many adjacent pixels: one or two
 // SIMD vectors of floats, and fine-grained enough that a small Gaussian
 // does not pay for the whole tile row.

@@ -53,16 +53,11 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
     alignas(64) T t[kTilePixels], t_final[kTilePixels],
         d_acc_depth[kTilePixels], d_accumulated[kTilePixels];
     alignas(64) T dc[3][kTilePixels], behind[3][kTilePixels],
-        behind_depth[kTilePixels], lane_x[kTileSize];
+        behind_depth[kTilePixels];
     alignas(64) T lane_sum[kPer][kTileSize];
     alignas(64) std::uint32_t last[kTilePixels];
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
-    const int x_begin = (tile % tiles_x) * kTileSize,
-              y_begin = (tile / tiles_x) * kTileSize;
-    const int x_end = std::min(x_begin + kTileSize, width),
-              y_end = std::min(y_begin + kTileSize, height);
-    for (int lane = 0; lane < kTileSize; ++lane)
-      lane_x[lane] = x_begin + lane + T(0.5);
+    const TileRect<T> rect(tile, tiles_x, width, height);
     // Pixels beyond the image (right or bottom edge tiles) have no
     // contributor: last = 0 keeps every lane loop from touching them.
     for (int i = 0; i < kTilePixels; ++i) {
@@ -71,9 +66,9 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
       d_acc_depth[i] = d_accumulated[i] = behind_depth[i] = T(0);
       for (int c = 0; c < 3; ++c) dc[c][i] = behind[c][i] = T(0);
     }
-    for (int py = y_begin; py < y_end; ++py) {
-      for (int px = x_begin; px < x_end; ++px) {
-        const int i = (py - y_begin) * kTileSize + (px - x_begin);
+    for (int py = rect.y_begin; py < rect.y_end; ++py) {
+      for (int px = rect.x_begin; px < rect.x_end; ++px) {
+        const int i = (py - rect.y_begin) * kTileSize + (px - rect.x_begin);
         const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
         t_final[i] = t[i] = final_t_[pixel];
         last[i] = last_[pixel];
@@ -96,7 +91,9 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
     for (std::uint32_t k = end; k-- > begin;) {
       const std::uint32_t g = ids_[k];
       TileBox box;
-      if (!BoxInTile(p, g, x_begin, x_end, y_begin, y_end, &box)) continue;
+      if (!BoxInTile(p, g, rect.x_begin, rect.x_end, rect.y_begin, rect.y_end,
+                     &box))
+        continue;
       const T gx = p.x[g], ca = p.conic_a[g], cb = p.conic_b[g],
               cc = p.conic_c[g];
       const T op = p.opacity[g], z = p.depth[g];
@@ -106,7 +103,8 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
         const T dy = py + T(0.5) - p.y[g];
         const ConicRow<T> conic(ca, cb, cc, dy);
         for (int group = box.group0; group <= box.group1; ++group) {
-          const int first = (py - y_begin) * kTileSize + group * kLaneGroup;
+          const int first =
+              (py - rect.y_begin) * kTileSize + group * kLaneGroup;
           const int lane0 = group * kLaneGroup;
           T *rt = t + first, *rbr = behind[0] + first, *rbg = behind[1] + first,
             *rbb = behind[2] + first, *rbd = behind_depth + first;
@@ -115,7 +113,7 @@ void RasterizerT<T>::BlendBackward(const RasterCameraT<T>& camera,
                   *racc = d_accumulated + first, *rfin = t_final + first;
           const std::uint32_t* rlast = last + first;
           for (int lane = 0; lane < kLaneGroup; ++lane) {
-            const T dx = lane_x[lane0 + lane] - gx;
+            const T dx = rect.lane_x[lane0 + lane] - gx;
             const PixelAlpha<T> a = EvaluateAlpha(conic, op, dx);
             // No contribution behind this pixel's last contributor.
             const T alpha = k < rlast[lane] ? a.alpha : T(0);

@@ -239,20 +239,15 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
     // lanes beyond the image's right edge): alpha * open is the alpha a
     // pixel sees, so done pixels need no branch.
     alignas(64) T t[kTilePixels], cr[kTilePixels], cg[kTilePixels],
-        cb[kTilePixels], cd[kTilePixels], open[kTilePixels], lane_x[kTileSize];
+        cb[kTilePixels], cd[kTilePixels], open[kTilePixels];
     alignas(64) std::uint32_t last[kTilePixels];
     const std::uint32_t begin = ranges_[2 * tile], end = ranges_[2 * tile + 1];
-    const int x_begin = (tile % tiles_x) * kTileSize,
-              y_begin = (tile / tiles_x) * kTileSize;
-    const int x_end = std::min(x_begin + kTileSize, width),
-              y_end = std::min(y_begin + kTileSize, height);
-    for (int lane = 0; lane < kTileSize; ++lane)
-      lane_x[lane] = x_begin + lane + T(0.5);
+    const TileRect<T> rect(tile, tiles_x, width, height);
     for (int i = 0; i < kTilePixels; ++i) {
       t[i] = T(1.0);
       cr[i] = cg[i] = cb[i] = cd[i] = T(0.0);
       last[i] = begin;
-      open[i] = x_begin + i % kTileSize < x_end ? T(1) : T(0);
+      open[i] = rect.x_begin + i % kTileSize < rect.x_end ? T(1) : T(0);
     }
     for (std::uint32_t k = begin; k < end; ++k) {
       // Once every pixel has stopped the rest of the tile's Gaussians
@@ -262,7 +257,9 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
         break;
       const std::uint32_t g = ids_[k];
       TileBox box;
-      if (!BoxInTile(p, g, x_begin, x_end, y_begin, y_end, &box)) continue;
+      if (!BoxInTile(p, g, rect.x_begin, rect.x_end, rect.y_begin, rect.y_end,
+                     &box))
+        continue;
       const T gx = p.x[g], op = p.opacity[g];
       const T red = p.r[g], green = p.g[g], blue = p.b[g], z = p.depth[g];
       evaluations += static_cast<std::uint64_t>(box.y1 - box.y0 + 1) *
@@ -271,11 +268,12 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
         const ConicRow<T> conic(p.conic_a[g], p.conic_b[g], p.conic_c[g],
                                 py + T(0.5) - p.y[g]);
         for (int group = box.group0; group <= box.group1; ++group) {
-          const int first = (py - y_begin) * kTileSize + group * kLaneGroup;
+          const int first =
+              (py - rect.y_begin) * kTileSize + group * kLaneGroup;
           T *rt = t + first, *rr = cr + first, *rg = cg + first,
             *rb = cb + first, *rd = cd + first, *ropen = open + first;
           std::uint32_t* rlast = last + first;
-          const T* rx = lane_x + group * kLaneGroup;
+          const T* rx = rect.lane_x + group * kLaneGroup;
           for (int lane = 0; lane < kLaneGroup; ++lane) {
             const T alpha =
                 ropen[lane] * EvaluateAlpha(conic, op, rx[lane] - gx).alpha;
@@ -299,9 +297,9 @@ void RasterizerT<T>::Blend(const RasterCameraT<T>& camera,
         }
       }
     }
-    for (int py = y_begin; py < y_end; ++py) {
-      for (int px = x_begin; px < x_end; ++px) {
-        const int i = (py - y_begin) * kTileSize + (px - x_begin);
+    for (int py = rect.y_begin; py < rect.y_end; ++py) {
+      for (int px = rect.x_begin; px < rect.x_end; ++px) {
+        const int i = (py - rect.y_begin) * kTileSize + (px - rect.x_begin);
         const std::size_t pixel = static_cast<std::size_t>(py) * width + px;
         out->rgb[3 * pixel] = cr[i] + t[i] * settings.background.x();
         out->rgb[3 * pixel + 1] = cg[i] + t[i] * settings.background.y();
