@@ -23,11 +23,6 @@ struct PlannedCommand {
 };
 
 const std::vector<PlannedCommand> kPlannedCommands = {
-    {"depth",
-     "Per-frame depth: from the dataset, or CPU stereo aligned to the sparse "
-     "points"},
-    {"fit",
-     "Fit the dynamic 4D Gaussians to the video (with panoramic expansion)"},
     {"expand",
      "Run one panoramic expansion step: trajectories, warping, prior, "
      "refinement"},
@@ -88,6 +83,8 @@ int Main(int argc, char** argv) {
   AddEvalCommand(app, &action);
   AddPlotCommand(app, &action);
   AddSfmCommand(app, &action);
+  AddDepthCommand(app, &action);
+  AddFitCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

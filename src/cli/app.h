@@ -38,5 +38,7 @@ void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);
 void AddPlotCommand(CLI::App& app, Action* action);
 void AddSfmCommand(CLI::App& app, Action* action);
+void AddDepthCommand(CLI::App& app, Action* action);
+void AddFitCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

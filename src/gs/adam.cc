@@ -37,6 +37,19 @@ int Adam::AddGroup(std::string name, std::vector<float>* params, int width,
   return static_cast<int>(groups_.size()) - 1;
 }
 
+void Adam::RestoreRows() {
+  if (groups_.empty()) return;
+  rows_ =
+      static_cast<std::int64_t>(groups_[0].params->size()) / groups_[0].width;
+  for (const Group& g : groups_) {
+    if (g.v.size() != g.params->size()) {
+      throw Error("adam", g.name, std::to_string(g.v.size()),
+                  "second moment does not match the parameters");
+    }
+  }
+  CheckSizes();
+}
+
 void Adam::SetLearningRate(int group, double lr) { groups_.at(group).lr = lr; }
 
 void Adam::CheckSizes() const {

@@ -58,6 +58,10 @@ class Adam {
   std::vector<float>& first_moment(int group) { return groups_[group].m; }
   std::vector<float>& second_moment(int group) { return groups_[group].v; }
   void set_step(std::int64_t step) { step_ = step; }
+  // After a checkpoint replaced every group's parameters and moments with
+  // arrays of another row count: takes the count from them. Throws
+  // pano4d::Error when the groups disagree.
+  void RestoreRows();
 
  private:
   struct Group {

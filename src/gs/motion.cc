@@ -278,6 +278,13 @@ template <typename T>
 double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
                             MotionBasesT<T>* d_bases) {
   double loss = 0;
+  // A mean over every (basis, time, component) second difference, so that
+  // the weight does not depend on K or the number of frames.
+  const std::size_t terms =
+      static_cast<std::size_t>(bases.num_bases) *
+      static_cast<std::size_t>(std::max(0, bases.num_times - 2)) * 7;
+  if (terms == 0) return 0.0;
+  weight /= static_cast<double>(terms);
   auto second_difference = [&](std::vector<T>& grads,
                                const std::vector<T>& values, int width) {
     for (int k = 0; k < bases.num_bases; ++k) {

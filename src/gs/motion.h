@@ -71,8 +71,9 @@ void PoseDynamicGaussiansBackward(
     std::vector<T>* d_means, std::vector<T>* d_quats, std::vector<T>* d_logits,
     MotionBasesT<T>* d_bases);
 
-// Temporal smoothness of the bases: sum over k, t of the squared second
-// difference of translations and rotations (acceleration), times `weight`.
+// Temporal smoothness of the bases: the mean over k, t and components of
+// the squared second difference of translations and rotations
+// (acceleration), times `weight`.
 // Adds its gradient into `d_bases` and returns the value.
 template <typename T>
 double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,

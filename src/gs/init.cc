@@ -1,0 +1,406 @@
+#include "src/gs/init.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "src/core/error.h"
+#include "src/core/log.h"
+
+namespace pano4d {
+namespace {
+
+// Initial scales are clamped to [kMinScaleVoxels, kMaxScaleVoxels] voxels:
+// duplicate points give a zero neighbour distance (log -inf), and isolated
+// points survivors of outlier removal would start as huge blobs.
+constexpr double kMinScaleVoxels = 0.25;
+constexpr double kMaxScaleVoxels = 8.0;
+// Nearest tracks that vote for a dynamic Gaussian's initial basis weights.
+constexpr int kVotingTracks = 8;
+// Added to each basis' share of the votes before the log: every basis keeps
+// some weight, so its gradient never vanishes.
+constexpr float kVoteFloor = 0.02f;
+// Procrustes inliers: residual within this many times the median.
+constexpr double kInlierFactor = 3.0;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+Eigen::Vector3f Unproject(const RasterCamera& cam, float u, float v, float z) {
+  const Eigen::Vector3f xc((u - cam.cx) / cam.fx * z, (v - cam.cy) / cam.fy * z,
+                           z);
+  return cam.rotation.transpose() * (xc - cam.translation);
+}
+
+// Depth under a continuous pixel position (nearest pixel); 0 outside.
+float DepthAt(const TrainingView& view, const Eigen::Vector2f& p) {
+  const int x = static_cast<int>(std::floor(p.x()));
+  const int y = static_cast<int>(std::floor(p.y()));
+  if (x < 0 || y < 0 || x >= view.camera.width || y >= view.camera.height)
+    return 0.0f;
+  return view.depth[static_cast<std::size_t>(y) * view.camera.width + x];
+}
+
+// Keeps every k-th point so that at most `max` remain (deterministic).
+PointCloud Thin(const PointCloud& cloud, std::int64_t max) {
+  if (static_cast<std::int64_t>(cloud.size()) <= max) return cloud;
+  PointCloud out;
+  const double step = static_cast<double>(cloud.size()) / max;
+  for (std::int64_t i = 0; i < max; ++i) {
+    const std::size_t j = static_cast<std::size_t>(i * step);
+    out.points.push_back(cloud.points[j]);
+    out.colors.push_back(cloud.colors[j]);
+  }
+  return out;
+}
+
+GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
+                                 const InitOptions& o) {
+  GaussianModel m;
+  m.sh_degree = o.sh_degree;
+  m.Resize(cloud.size());
+  if (cloud.size() == 0) return m;
+  const std::vector<float> distance = MeanNeighbourDistance(cloud, 3);
+  const float opacity = InverseSigmoid(static_cast<float>(o.initial_opacity));
+  const int k = m.sh_coefficients();
+  std::fill(m.sh.begin(), m.sh.end(), 0.0f);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    for (int c = 0; c < 3; ++c) m.means[i * 3 + c] = cloud.points[i][c];
+    const double d =
+        std::clamp(static_cast<double>(distance[i]), kMinScaleVoxels * voxel,
+                   kMaxScaleVoxels * voxel);
+    for (int c = 0; c < 3; ++c)
+      m.log_scales[i * 3 + c] = static_cast<float>(std::log(d));
+    m.quats[i * 4] = 1;
+    m.quats[i * 4 + 1] = m.quats[i * 4 + 2] = m.quats[i * 4 + 3] = 0;
+    m.opacities[i] = opacity;
+    for (int c = 0; c < 3; ++c)
+      m.sh[(i * k) * 3 + c] = (cloud.colors[i][c] - 0.5f) / kShC0;
+  }
+  return m;
+}
+
+}  // namespace
+
+void InitOptions::Check() const {
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0)) {
+      throw Error("init options", name, std::to_string(v), "must be positive");
+    }
+  };
+  positive(pixel_stride, "pixel_stride");
+  positive(voxel_pixels, "voxel_pixels");
+  positive(static_cast<double>(max_static), "max_static");
+  positive(static_cast<double>(max_dynamic), "max_dynamic");
+  if (num_bases < 0) {
+    throw Error("init options", "num_bases", std::to_string(num_bases),
+                "must be zero or positive");
+  }
+  positive(track_stride, "track_stride");
+  positive(min_tracks_per_fit, "min_tracks_per_fit");
+  if (!(initial_opacity > 0 && initial_opacity < 1)) {
+    throw Error("init options", "initial_opacity",
+                std::to_string(initial_opacity), "must be in (0, 1)");
+  }
+  if (sh_degree < 0 || sh_degree > 3) {
+    throw Error("init options", "sh_degree", std::to_string(sh_degree),
+                "must be 0..3");
+  }
+  filter.Check();
+  tracks.Check();
+}
+
+std::string InitReport::Brief() const {
+  std::ostringstream s;
+  s << "init: " << static_points << " static Gaussians (of "
+    << static_points_raw << " points), " << dynamic_points << " dynamic (of "
+    << dynamic_points_raw << "), " << num_bases << " motion bases from "
+    << tracks << " tracks (coverage "
+    << static_cast<int>(track_coverage * 100 + 0.5) << "%), canonical time "
+    << canonical_time << ", voxel " << voxel_size << ", " << seconds << " s";
+  return s.str();
+}
+
+GaussianScene InitializeScene(const std::vector<TrainingView>& views,
+                              int num_times, const InitOptions& o,
+                              InitReport* report_out) {
+  o.Check();
+  const auto start = std::chrono::steady_clock::now();
+  InitReport report;
+  if (views.empty()) throw Error("init", "views", "0", "no training views");
+
+  std::vector<double> depths, focals;
+  for (const TrainingView& v : views) {
+    if (v.depth.empty()) {
+      PANO4D_LOG(kWarning) << "init: view " << v.name
+                           << " has no depth; it adds no Gaussians";
+      continue;
+    }
+    for (std::size_t p = 0; p < v.depth.size(); p += 97)
+      if (v.depth[p] > 0) depths.push_back(v.depth[p]);
+    focals.push_back(0.5 * (v.camera.fx + v.camera.fy));
+  }
+  if (depths.empty()) {
+    throw Error("init", "depth", "",
+                "no training view has depth; run "
+                "`pano4d depth` first");
+  }
+  const double voxel = Median(depths) * o.voxel_pixels / Median(focals);
+  report.voxel_size = voxel;
+
+  // The canonical time: the middle of the dynamic content's time range.
+  bool any_dynamic = false;
+  for (const TrainingView& v : views) {
+    if (o.num_bases == 0 || v.depth.empty()) continue;
+    for (std::uint8_t d : v.dynamic) any_dynamic |= d != 0;
+  }
+  int canonical = num_times / 2;
+  if (any_dynamic) {
+    int best = -1;
+    for (const TrainingView& v : views) {
+      if (v.depth.empty() || v.dynamic.empty()) continue;
+      if (best < 0 ||
+          std::abs(v.time - num_times / 2) < std::abs(best - num_times / 2))
+        best = v.time;
+    }
+    canonical = best;
+  }
+  canonical = std::clamp(canonical, 0, num_times - 1);
+  report.canonical_time = canonical;
+
+  PointCloud statics, dynamics;
+  for (const TrainingView& v : views) {
+    if (v.depth.empty()) continue;
+    const int w = v.camera.width, h = v.camera.height;
+    const bool is_canonical = v.time == canonical;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * w + x;
+        const float z = v.depth[p];
+        if (!(z > 0)) continue;
+        const bool dynamic = any_dynamic && !v.dynamic.empty() && v.dynamic[p];
+        const bool on_grid = x % o.pixel_stride == 0 && y % o.pixel_stride == 0;
+        if (dynamic && !is_canonical) continue;
+        if (!dynamic && !on_grid) continue;
+        PointCloud& cloud = dynamic ? dynamics : statics;
+        cloud.points.push_back(Unproject(v.camera, x + 0.5f, y + 0.5f, z));
+        cloud.colors.emplace_back(v.rgb[p * 3], v.rgb[p * 3 + 1],
+                                  v.rgb[p * 3 + 2]);
+      }
+    }
+  }
+  report.static_points_raw = static_cast<std::int64_t>(statics.size());
+  report.dynamic_points_raw = static_cast<std::int64_t>(dynamics.size());
+  PointCloudFilterOptions filter = o.filter;
+  filter.voxel_size = voxel;
+  if (statics.size() > 0)
+    statics = Thin(FilterPointCloud(statics, filter), o.max_static);
+  if (dynamics.size() > 0)
+    dynamics = Thin(FilterPointCloud(dynamics, filter), o.max_dynamic);
+  report.static_points = static_cast<std::int64_t>(statics.size());
+  report.dynamic_points = static_cast<std::int64_t>(dynamics.size());
+
+  GaussianScene scene;
+  scene.num_times = num_times;
+  scene.canonical_time = canonical;
+  scene.statics = GaussiansFromCloud(statics, voxel, o);
+  scene.dynamics = GaussiansFromCloud(dynamics, voxel, o);
+  scene.dynamics.sh_degree = o.sh_degree;
+  if (dynamics.size() == 0) {
+    report.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+            .count();
+    if (report_out) *report_out = report;
+    return scene;
+  }
+
+  // Tracks from the canonical frame's dynamic pixels.
+  const TrainingView* ref = nullptr;
+  std::vector<const TrainingView*> by_time(num_times, nullptr);
+  for (const TrainingView& v : views) {
+    if (!by_time[v.time]) by_time[v.time] = &v;
+    if (v.time == canonical && !v.depth.empty() && !v.dynamic.empty() && !ref)
+      ref = &v;
+  }
+  by_time[canonical] = ref;
+  std::vector<cv::Mat> frames(num_times);
+  for (int t = 0; t < num_times; ++t) {
+    const TrainingView* v = by_time[t];
+    if (!v || v->camera.width != ref->camera.width ||
+        v->camera.height != ref->camera.height)
+      continue;
+    frames[t] = cv::Mat(v->camera.height, v->camera.width, CV_32FC3,
+                        const_cast<float*>(v->rgb.data()));
+  }
+  std::vector<Eigen::Vector2f> seeds;
+  for (int y = 0; y < ref->camera.height; y += o.track_stride)
+    for (int x = 0; x < ref->camera.width; x += o.track_stride)
+      if (ref->dynamic[static_cast<std::size_t>(y) * ref->camera.width + x] &&
+          ref->depth[static_cast<std::size_t>(y) * ref->camera.width + x] > 0)
+        seeds.emplace_back(x + 0.5f, y + 0.5f);
+  const Tracks2D tracks2d = ChainFlowTracks(frames, canonical, seeds, o.tracks);
+
+  // Lift: X(t) for every valid (track, time) with depth.
+  const std::size_t n = tracks2d.size();
+  std::vector<Eigen::Vector3f> lifted(n * num_times, Eigen::Vector3f::Zero());
+  std::vector<std::uint8_t> ok(n * num_times, 0);
+  std::int64_t valid_pairs = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int t = 0; t < num_times; ++t) {
+      if (!tracks2d.is_valid(i, t) || !by_time[t]) continue;
+      const Eigen::Vector2f& p = tracks2d.pixel(i, t);
+      const float z = DepthAt(*by_time[t], p);
+      if (!(z > 0)) continue;
+      lifted[i * num_times + t] =
+          Unproject(by_time[t]->camera, p.x(), p.y(), z);
+      ok[i * num_times + t] = 1;
+      ++valid_pairs;
+    }
+  }
+  report.tracks = static_cast<std::int64_t>(n);
+  report.track_coverage =
+      n == 0 ? 0.0 : static_cast<double>(valid_pairs) / (n * num_times);
+
+  // k-means on displacement trajectories X(t) - X(canonical), gaps filled
+  // from the nearest valid time.
+  const int k =
+      std::max(1, std::min<int>(o.num_bases, static_cast<int>(n) / 3));
+  std::vector<int> labels(n, 0);
+  if (n >= 2 && k > 1) {
+    cv::Mat features(static_cast<int>(n), num_times * 3, CV_32F);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3f origin = lifted[i * num_times + canonical];
+      for (int t = 0; t < num_times; ++t) {
+        int nearest = canonical;
+        for (int d = 0; d < num_times; ++d) {
+          if (t - d >= 0 && ok[i * num_times + t - d]) {
+            nearest = t - d;
+            break;
+          }
+          if (t + d < num_times && ok[i * num_times + t + d]) {
+            nearest = t + d;
+            break;
+          }
+        }
+        const Eigen::Vector3f disp = lifted[i * num_times + nearest] - origin;
+        for (int c = 0; c < 3; ++c)
+          features.at<float>(static_cast<int>(i), t * 3 + c) = disp[c];
+      }
+    }
+    cv::Mat label_mat, centres;
+    cv::theRNG().state = o.seed + 1;  // cv::kmeans draws from OpenCV's RNG
+    cv::kmeans(features, k, label_mat,
+               cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
+                                50, 1e-6),
+               3, cv::KMEANS_PP_CENTERS, centres);
+    for (std::size_t i = 0; i < n; ++i)
+      labels[i] = label_mat.at<int>(static_cast<int>(i));
+  }
+
+  // One Procrustes fit per cluster and time; robust by one refit on the
+  // inliers; times without enough tracks copy the nearest fitted time.
+  scene.bases.Reset(k, num_times);
+  for (int c = 0; c < k; ++c) {
+    std::vector<std::uint8_t> fitted(num_times, 0);
+    fitted[canonical] = 1;  // the identity, by definition of canonical
+    for (int t = 0; t < num_times; ++t) {
+      if (t == canonical) continue;
+      std::vector<std::size_t> members;
+      for (std::size_t i = 0; i < n; ++i)
+        if (labels[i] == c && ok[i * num_times + t] &&
+            ok[i * num_times + canonical])
+          members.push_back(i);
+      if (static_cast<int>(members.size()) < o.min_tracks_per_fit) continue;
+      Eigen::Matrix4d transform = Eigen::Matrix4d::Identity();
+      for (int pass = 0; pass < 2; ++pass) {
+        Eigen::Matrix3Xd src(3, members.size()), dst(3, members.size());
+        for (std::size_t j = 0; j < members.size(); ++j) {
+          src.col(j) =
+              lifted[members[j] * num_times + canonical].cast<double>();
+          dst.col(j) = lifted[members[j] * num_times + t].cast<double>();
+        }
+        transform = Eigen::umeyama(src, dst, false);
+        if (pass == 1) break;
+        std::vector<double> residual(members.size());
+        for (std::size_t j = 0; j < members.size(); ++j)
+          residual[j] = (transform.topLeftCorner<3, 3>() * src.col(j) +
+                         transform.topRightCorner<3, 1>() - dst.col(j))
+                            .norm();
+        const double limit = kInlierFactor * Median(residual) + 1e-12;
+        std::vector<std::size_t> inliers;
+        for (std::size_t j = 0; j < members.size(); ++j)
+          if (residual[j] <= limit) inliers.push_back(members[j]);
+        if (static_cast<int>(inliers.size()) < o.min_tracks_per_fit) break;
+        members.swap(inliers);
+      }
+      if (!transform.allFinite()) continue;
+      Eigen::Quaterniond q(Eigen::Matrix3d(transform.topLeftCorner<3, 3>()));
+      if (q.w() < 0) q.coeffs() *= -1;  // the identity's hemisphere
+      float* r = scene.bases.rotation(c, t);
+      r[0] = static_cast<float>(q.w());
+      r[1] = static_cast<float>(q.x());
+      r[2] = static_cast<float>(q.y());
+      r[3] = static_cast<float>(q.z());
+      float* tr = scene.bases.translation(c, t);
+      for (int j = 0; j < 3; ++j) tr[j] = static_cast<float>(transform(j, 3));
+      fitted[t] = 1;
+    }
+    for (int t = 0; t < num_times; ++t) {
+      if (fitted[t]) continue;
+      for (int d = 1; d < num_times; ++d) {
+        const int s = t - d >= 0 && fitted[t - d]          ? t - d
+                      : t + d < num_times && fitted[t + d] ? t + d
+                                                           : -1;
+        if (s < 0) continue;
+        std::copy_n(scene.bases.rotation(c, s), 4, scene.bases.rotation(c, t));
+        std::copy_n(scene.bases.translation(c, s), 3,
+                    scene.bases.translation(c, t));
+        break;
+      }
+    }
+  }
+
+  // Weights: the clusters of the nearest tracks at the canonical time.
+  const std::size_t nd = scene.dynamics.size();
+  scene.logits.assign(nd * k, 0.0f);
+  std::vector<std::size_t> anchored;
+  for (std::size_t i = 0; i < n; ++i)
+    if (ok[i * num_times + canonical]) anchored.push_back(i);
+  if (!anchored.empty() && k > 1) {
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t g = 0; g < static_cast<std::ptrdiff_t>(nd); ++g) {
+      const Eigen::Vector3f mu(scene.dynamics.means[g * 3],
+                               scene.dynamics.means[g * 3 + 1],
+                               scene.dynamics.means[g * 3 + 2]);
+      std::vector<std::pair<float, int>> nearest;
+      nearest.reserve(anchored.size());
+      for (std::size_t i : anchored)
+        nearest.push_back(
+            {(lifted[i * num_times + canonical] - mu).squaredNorm(),
+             labels[i]});
+      const std::size_t m =
+          std::min<std::size_t>(kVotingTracks, nearest.size());
+      std::partial_sort(nearest.begin(), nearest.begin() + m, nearest.end());
+      std::vector<float> share(k, 0.0f);
+      for (std::size_t j = 0; j < m; ++j) share[nearest[j].second] += 1.0f / m;
+      for (int c = 0; c < k; ++c)
+        scene.logits[g * k + c] = std::log(share[c] + kVoteFloor);
+    }
+  }
+  report.num_bases = k;
+  report.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  if (report_out) *report_out = report;
+  return scene;
+}
+
+}  // namespace pano4d

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "src/geometry/point_cloud.h"
+#include "src/geometry/tracks.h"
+#include "src/gs/scene.h"
+#include "src/gs/trainer.h"
+
+namespace pano4d {
+
+// Gaussians from the training views' depth (DESIGN.md "init"): static
+// pixels of every view unprojected, denoised (PCL statistical outlier
+// removal) and thinned (PCL voxel grid); dynamic pixels of the canonical
+// frame the same way; initial scales from the mean distance to the 3
+// nearest neighbours (FLANN). Motion bases from 2D flow tracks of the
+// canonical frame's dynamic pixels, lifted with depth: k-means on their 3D
+// displacements, then one Procrustes fit (Eigen::umeyama) per cluster and
+// frame. A scene without dynamic pixels gets no dynamic Gaussians and no
+// bases.
+struct InitOptions {
+  int pixel_stride = 2;  // static pixels: every stride-th in x and y
+  // Voxel edge in pixels at the median depth (world size = median depth x
+  // voxel_pixels / median focal length).
+  double voxel_pixels = 2.0;
+  PointCloudFilterOptions filter;  // its voxel_size is set from the above
+  std::int64_t max_static = 400000;
+  std::int64_t max_dynamic = 100000;
+  int num_bases = 10;    // K; 0 treats every pixel as static
+  int track_stride = 3;  // seeds: every stride-th dynamic pixel
+  TrackOptions tracks;
+  // Fewer valid tracks than this in a cluster at a time: that time's pose
+  // is taken from the nearest time that has enough.
+  int min_tracks_per_fit = 6;
+  double initial_opacity = 0.1;
+  int sh_degree = 0;
+  std::uint64_t seed = 0;
+  void Check() const;  // throws pano4d::Error naming the field
+};
+
+struct InitReport {
+  std::int64_t static_points_raw = 0, static_points = 0;
+  std::int64_t dynamic_points_raw = 0, dynamic_points = 0;
+  std::int64_t tracks = 0;
+  double track_coverage = 0.0;  // valid (track, time) pairs / all
+  int num_bases = 0;
+  int canonical_time = 0;
+  double voxel_size = 0.0;
+  double seconds = 0.0;
+  std::string Brief() const;  // one line for logs
+};
+
+// `views` as the trainer uses them (depth required on the views that
+// contribute; views without depth are skipped with a warning).
+GaussianScene InitializeScene(const std::vector<TrainingView>& views,
+                              int num_times, const InitOptions& options,
+                              InitReport* report = nullptr);
+
+}  // namespace pano4d

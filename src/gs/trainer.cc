@@ -1,0 +1,885 @@
+#include "src/gs/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/npy.h"
+#include "src/gs/loss.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr char kCheckpointMagic[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '1'};
+// Opacity that 3DGS's reset caps every Gaussian at.
+constexpr float kResetOpacity = 0.01f;
+// 3DGS's split: two samples, scales divided by 0.8 x 2.
+constexpr int kSplitSamples = 2;
+constexpr float kSplitScaleDivisor = 1.6f;
+// Pruning by world size: larger than this fraction of the scene extent.
+constexpr double kMaxWorldScaleFraction = 0.1;
+// Learning rates of positions decay to this fraction over the run (3DGS:
+// 1.6e-4 -> 1.6e-6).
+constexpr double kFinalLearningRateFraction = 0.01;
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+float Sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
+
+}  // namespace
+
+std::vector<TrainingView> LoadTrainingViews(
+    const std::vector<WorkspaceFrame>& frames) {
+  std::vector<TrainingView> views(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const WorkspaceFrame& f = frames[i];
+    TrainingView& v = views[i];
+    v.name = f.name;
+    v.time = f.time;
+    v.camera = RasterCamera::FromPosed(f.camera);
+    const int w = v.camera.width, h = v.camera.height;
+    const Image image = ReadImage(f.rgb);
+    if (image.width() != w || image.height() != h) {
+      throw Error(
+          f.rgb.string(), "size",
+          std::to_string(image.width()) + "x" + std::to_string(image.height()),
+          "its camera is " + std::to_string(w) + "x" + std::to_string(h));
+    }
+    const cv::Mat rgb =
+        image.mat().isContinuous() ? image.mat() : image.mat().clone();
+    v.rgb.assign(rgb.ptr<float>(), rgb.ptr<float>() + w * h * 3);
+    if (!f.depth.empty()) {
+      const NpyArray depth = ReadNpy(f.depth);
+      const bool shape_ok = depth.shape.size() >= 2 && depth.shape[0] == h &&
+                            depth.shape[1] == w &&
+                            (depth.shape.size() == 2 ||
+                             (depth.shape.size() == 3 && depth.shape[2] == 1));
+      if (!shape_ok) {
+        std::string shape;
+        for (auto s : depth.shape) {
+          if (!shape.empty()) shape += 'x';
+          shape += std::to_string(s);
+        }
+        throw Error(f.depth.string(), "shape", shape,
+                    "expected " + std::to_string(h) + "x" + std::to_string(w) +
+                        " like the image");
+      }
+      v.depth = depth.ToFloats();
+      for (float& d : v.depth) {
+        if (!std::isfinite(d)) {
+          throw Error(f.depth.string(), "value", std::to_string(d),
+                      "depth maps must be finite (0 marks no depth)");
+        }
+        if (d < 0) d = 0;
+      }
+    }
+    if (!f.dynamic_mask.empty()) {
+      const cv::Mat mask = ReadMask(f.dynamic_mask);
+      if (mask.cols != w || mask.rows != h) {
+        throw Error(
+            f.dynamic_mask.string(), "size",
+            std::to_string(mask.cols) + "x" + std::to_string(mask.rows),
+            "its camera is " + std::to_string(w) + "x" + std::to_string(h));
+      }
+      v.dynamic.resize(static_cast<std::size_t>(w) * h);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          v.dynamic[y * w + x] = mask.at<std::uint8_t>(y, x) >= 128;
+    }
+  }
+  return views;
+}
+
+void TrainerOptions::Check() const {
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) {
+      throw Error("fit options", name, std::to_string(v), "must be positive");
+    }
+  };
+  const auto non_negative = [](double v, const char* name) {
+    if (!(v >= 0) || !std::isfinite(v)) {
+      throw Error("fit options", name, std::to_string(v),
+                  "must be zero or positive");
+    }
+  };
+  positive(iterations, "iterations");
+  if (!(ssim_weight >= 0 && ssim_weight <= 1)) {
+    throw Error("fit options", "ssim_weight", std::to_string(ssim_weight),
+                "must be in [0, 1]");
+  }
+  non_negative(depth_weight, "depth_weight");
+  non_negative(smoothness_weight, "smoothness_weight");
+  for (auto [v, name] : {std::pair{lr_mean, "lr_mean"},
+                         {lr_log_scale, "lr_log_scale"},
+                         {lr_quat, "lr_quat"},
+                         {lr_opacity, "lr_opacity"},
+                         {lr_sh, "lr_sh"},
+                         {lr_logit, "lr_logit"},
+                         {lr_basis_rotation, "lr_basis_rotation"},
+                         {lr_basis_translation, "lr_basis_translation"}})
+    non_negative(v, name);
+  positive(densify_every, "densify_every");
+  positive(densify_gradient, "densify_gradient");
+  positive(percent_dense, "percent_dense");
+  non_negative(prune_opacity, "prune_opacity");
+  positive(max_screen_radius, "max_screen_radius");
+  positive(opacity_reset_every, "opacity_reset_every");
+  positive(static_cast<double>(max_gaussians), "max_gaussians");
+}
+
+nlohmann::json TrainerOptions::ToJson() const {
+  return {{"iterations", iterations},
+          {"seed", seed},
+          {"ssim_weight", ssim_weight},
+          {"depth_weight", depth_weight},
+          {"smoothness_weight", smoothness_weight},
+          {"lr_mean", lr_mean},
+          {"lr_log_scale", lr_log_scale},
+          {"lr_quat", lr_quat},
+          {"lr_opacity", lr_opacity},
+          {"lr_sh", lr_sh},
+          {"lr_logit", lr_logit},
+          {"lr_basis_rotation", lr_basis_rotation},
+          {"lr_basis_translation", lr_basis_translation},
+          {"densify_from", densify_from},
+          {"densify_until", densify_until},
+          {"densify_every", densify_every},
+          {"densify_gradient", densify_gradient},
+          {"percent_dense", percent_dense},
+          {"prune_opacity", prune_opacity},
+          {"max_screen_radius", max_screen_radius},
+          {"opacity_reset_every", opacity_reset_every},
+          {"max_gaussians", max_gaussians},
+          {"background", {background.x(), background.y(), background.z()}}};
+}
+
+Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
+                 TrainerOptions options)
+    : options_(std::move(options)),
+      scene_(std::move(scene)),
+      views_(std::move(views)),
+      rng_(options_.seed) {
+  options_.Check();
+  scene_.Check();
+  if (options_.densify_until < 0)
+    options_.densify_until = options_.iterations / 2;
+  if (views_.empty()) {
+    throw Error("fit", "views", "0", "no training views");
+  }
+  for (const TrainingView& v : views_) {
+    if (v.time < 0 || v.time >= scene_.num_times) {
+      throw Error(
+          "fit", "view " + v.name + " time", std::to_string(v.time),
+          "outside the scene's " + std::to_string(scene_.num_times) + " times");
+    }
+  }
+  // The scene extent scales position learning rates and the densification
+  // thresholds. 3DGS takes 1.1 x the cameras' radius; a video camera may
+  // barely move, so the median depth of the views bounds it from below (the
+  // size of what the cameras look at).
+  Eigen::Vector3f mean_centre = Eigen::Vector3f::Zero();
+  for (const TrainingView& v : views_) mean_centre += v.camera.Center();
+  mean_centre /= static_cast<float>(views_.size());
+  double radius = 0;
+  for (const TrainingView& v : views_)
+    radius = std::max(radius, double((v.camera.Center() - mean_centre).norm()));
+  median_depth_.assign(views_.size(), 0.0f);
+  std::vector<float> medians;
+  for (std::size_t i = 0; i < views_.size(); ++i) {
+    std::vector<float> valid;
+    for (float d : views_[i].depth)
+      if (d > 0) valid.push_back(d);
+    if (valid.empty()) continue;
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2,
+                     valid.end());
+    median_depth_[i] = valid[valid.size() / 2];
+    medians.push_back(median_depth_[i]);
+  }
+  double depth_scale = 0;
+  if (!medians.empty()) {
+    std::nth_element(medians.begin(), medians.begin() + medians.size() / 2,
+                     medians.end());
+    depth_scale = medians[medians.size() / 2];
+  }
+  extent_ = std::max(1.1 * radius, depth_scale);
+  if (!(extent_ > 0)) extent_ = 1.0;
+  RegisterGroups();
+  UpdateLearningRates();
+  const std::size_t n = scene_.size();
+  grad_accum_.assign(n, 0.0f);
+  max_radius_.assign(n, 0.0f);
+  grad_count_.assign(n, 0);
+}
+
+void Trainer::RegisterGroups() {
+  GaussianModel& s = scene_.statics;
+  static_mean_group_ = static_adam_.AddGroup("means", &s.means, 3, 0);
+  static_adam_.AddGroup("log_scales", &s.log_scales, 3, options_.lr_log_scale);
+  static_adam_.AddGroup("quats", &s.quats, 4, options_.lr_quat);
+  static_adam_.AddGroup("opacities", &s.opacities, 1, options_.lr_opacity);
+  static_adam_.AddGroup("sh", &s.sh, s.sh_coefficients() * 3, options_.lr_sh);
+  if (!scene_.has_motion()) return;
+  GaussianModel& d = scene_.dynamics;
+  dynamic_mean_group_ = dynamic_adam_.AddGroup("means", &d.means, 3, 0);
+  dynamic_adam_.AddGroup("log_scales", &d.log_scales, 3, options_.lr_log_scale);
+  dynamic_adam_.AddGroup("quats", &d.quats, 4, options_.lr_quat);
+  dynamic_adam_.AddGroup("opacities", &d.opacities, 1, options_.lr_opacity);
+  dynamic_adam_.AddGroup("sh", &d.sh, d.sh_coefficients() * 3, options_.lr_sh);
+  dynamic_adam_.AddGroup("logits", &scene_.logits, scene_.bases.num_bases,
+                         options_.lr_logit);
+  MotionBases& b = scene_.bases;
+  basis_adam_.AddGroup("rotations", &b.rotations, b.num_times * 4,
+                       options_.lr_basis_rotation);
+  basis_translation_group_ =
+      basis_adam_.AddGroup("translations", &b.translations, b.num_times * 3, 0);
+}
+
+void Trainer::UpdateLearningRates() {
+  const auto decayed = [&](double lr) {
+    return ExponentialLearningRate(lr * extent_,
+                                   lr * extent_ * kFinalLearningRateFraction,
+                                   iteration_, options_.iterations);
+  };
+  static_adam_.SetLearningRate(static_mean_group_, decayed(options_.lr_mean));
+  if (scene_.has_motion()) {
+    dynamic_adam_.SetLearningRate(dynamic_mean_group_,
+                                  decayed(options_.lr_mean));
+    basis_adam_.SetLearningRate(basis_translation_group_,
+                                decayed(options_.lr_basis_translation));
+  }
+}
+
+int Trainer::NextView() {
+  if (order_pos_ >= order_.size()) {
+    order_.resize(views_.size());
+    std::iota(order_.begin(), order_.end(), 0);
+    std::shuffle(order_.begin(), order_.end(), rng_);
+    order_pos_ = 0;
+  }
+  return order_[order_pos_++];
+}
+
+void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
+  RasterSettings settings;
+  settings.background = options_.background;
+  scene_.ComposeAt(time, &composed_);
+  rasterizer_.Forward(composed_, camera, settings, out);
+}
+
+void Trainer::Backprop(const RasterCamera& camera, int time,
+                       const RenderOutput& out, const std::vector<float>& d_rgb,
+                       const std::vector<float>& d_depth) {
+  RasterSettings settings;
+  settings.background = options_.background;
+  rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
+                            &grads2d_);
+  rasterizer_.ProjectBackward(composed_, camera, grads2d_, &grads_);
+  if (gradient_hook) gradient_hook(&grads_);
+
+  // A Gaussian with any non-finite gradient is left out of this step (its
+  // gradient zeroed, so that it cannot reach the shared motion bases), and
+  // counted.
+  const std::size_t n = composed_.size();
+  const int k3 = composed_.sh_coefficients() * 3;
+  std::int64_t bad = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    bool finite = std::isfinite(grads_.opacities[i]);
+    for (int j = 0; j < 3; ++j)
+      finite = finite && std::isfinite(grads_.means[i * 3 + j]) &&
+               std::isfinite(grads_.log_scales[i * 3 + j]);
+    for (int j = 0; j < 4; ++j)
+      finite = finite && std::isfinite(grads_.quats[i * 4 + j]);
+    for (int j = 0; j < k3; ++j)
+      finite = finite && std::isfinite(grads_.sh[i * k3 + j]);
+    for (int j = 0; j < 2; ++j)
+      finite = finite && std::isfinite(grads_.means2d[i * 2 + j]);
+    if (finite) continue;
+    ++bad;
+    grads_.opacities[i] = 0;
+    std::fill_n(&grads_.means[i * 3], 3, 0.0f);
+    std::fill_n(&grads_.log_scales[i * 3], 3, 0.0f);
+    std::fill_n(&grads_.quats[i * 4], 4, 0.0f);
+    std::fill_n(&grads_.sh[i * k3], k3, 0.0f);
+    std::fill_n(&grads_.means2d[i * 2], 2, 0.0f);
+  }
+  if (bad > 0) {
+    skipped_rows_total_ += bad;
+    PANO4D_LOG(kWarning) << "fit: iteration " << iteration_ + 1 << ": " << bad
+                         << " Gaussian(s) had non-finite gradients; their "
+                            "update was skipped";
+  }
+
+  const std::size_t ns = scene_.statics.size();
+  const auto add = [](const std::vector<float>& src, std::size_t begin,
+                      std::size_t count, std::vector<float>* dst) {
+    for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
+  };
+  add(grads_.means, 0, ns * 3, &static_grads_.means);
+  add(grads_.log_scales, 0, ns * 3, &static_grads_.log_scales);
+  add(grads_.quats, 0, ns * 4, &static_grads_.quats);
+  add(grads_.opacities, 0, ns, &static_grads_.opacities);
+  add(grads_.sh, 0, ns * k3, &static_grads_.sh);
+  const std::size_t nd = scene_.dynamics.size();
+  if (nd > 0) {
+    add(grads_.log_scales, ns * 3, nd * 3, &dynamic_grads_.log_scales);
+    add(grads_.opacities, ns, nd, &dynamic_grads_.opacities);
+    add(grads_.sh, ns * k3, nd * k3, &dynamic_grads_.sh);
+    const auto start = Clock::now();
+    PoseDynamicGaussiansBackward(scene_.dynamics, scene_.logits, scene_.bases,
+                                 time, ns, grads_.means, grads_.quats,
+                                 &dynamic_grads_.means, &dynamic_grads_.quats,
+                                 &logit_grads_, &basis_grads_);
+    times_.motion += Since(start);
+  }
+}
+
+StepReport Trainer::Step() {
+  StepReport report;
+  RasterSettings settings;
+  settings.background = options_.background;
+  const TrainingView& view = views_[NextView()];
+  const int w = view.camera.width, h = view.camera.height;
+
+  auto start = Clock::now();
+  scene_.ComposeAt(view.time, &composed_);
+  times_.compose += Since(start);
+  start = Clock::now();
+  rasterizer_.Forward(composed_, view.camera, settings, &out_);
+  times_.forward += Since(start);
+
+  start = Clock::now();
+  const PhotometricLoss photo = ComputePhotometricLoss(
+      out_.rgb, view.rgb, w, h, options_.ssim_weight, &d_rgb_);
+  report.l1 = photo.l1;
+  report.ssim = photo.ssim;
+  double mse = 0;
+  for (std::size_t i = 0; i < out_.rgb.size(); ++i) {
+    const double e = double(out_.rgb[i]) - view.rgb[i];
+    mse += e * e;
+  }
+  mse /= static_cast<double>(out_.rgb.size());
+  report.psnr = mse > 0 ? -10.0 * std::log10(mse) : 99.0;
+  d_depth_.clear();
+  const float median = median_depth_[&view - views_.data()];
+  if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {
+    d_depth_.assign(view.depth.size(), 0.0f);
+    std::size_t count = 0;
+    for (float d : view.depth) count += d > 0;
+    double sum = 0;
+    const double scale = 1.0 / (static_cast<double>(count) * median);
+    const float g = static_cast<float>(options_.depth_weight * scale);
+    for (std::size_t p = 0; p < view.depth.size(); ++p) {
+      if (!(view.depth[p] > 0)) continue;
+      const float diff = out_.depth[p] - view.depth[p];
+      sum += std::abs(diff);
+      d_depth_[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
+    }
+    report.depth = options_.depth_weight * sum * scale;
+  }
+  times_.loss += Since(start);
+  report.loss = photo.total + report.depth;
+  if (!std::isfinite(report.loss)) {
+    ++skipped_steps_total_;
+    ++iteration_;
+    report.iteration = iteration_;
+    report.skipped_step = true;
+    PANO4D_LOG(kWarning) << "fit: iteration " << iteration_ << " (view "
+                         << view.name
+                         << "): the loss is not finite; step skipped";
+    return report;
+  }
+
+  start = Clock::now();
+  static_grads_.Assign(scene_.statics);
+  dynamic_grads_.Assign(scene_.dynamics);
+  logit_grads_.assign(scene_.logits.size(), 0.0f);
+  basis_grads_.num_bases = scene_.bases.num_bases;
+  basis_grads_.num_times = scene_.bases.num_times;
+  basis_grads_.rotations.assign(scene_.bases.rotations.size(), 0.0f);
+  basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
+  const double motion_before = times_.motion;
+  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_);
+
+  // Densification statistics: the screen-space gradient of each mean in
+  // NDC units (pixels x size / 2), as 3DGS's threshold assumes.
+  const auto& radius = rasterizer_.projected().radius;
+  for (std::size_t i = 0; i < composed_.size(); ++i) {
+    if (radius[i] <= 0) continue;
+    const float gx = grads_.means2d[i * 2] * 0.5f * w;
+    const float gy = grads_.means2d[i * 2 + 1] * 0.5f * h;
+    grad_accum_[i] += std::sqrt(gx * gx + gy * gy);
+    grad_count_[i] += 1;
+    max_radius_[i] = std::max(max_radius_[i], static_cast<float>(radius[i]));
+  }
+
+  if (extra_view) {
+    if (const ExtraView* extra = extra_view(iteration_)) {
+      RenderOutput extra_out;
+      scene_.ComposeAt(extra->time, &composed_);
+      rasterizer_.Forward(composed_, extra->camera, settings, &extra_out);
+      const std::size_t pixels = extra->mask.size();
+      std::size_t count = 0;
+      for (std::uint8_t m : extra->mask) count += m != 0;
+      d_rgb_extra_.assign(extra_out.rgb.size(), 0.0f);
+      double sum = 0;
+      if (count > 0 && extra_out.rgb.size() == pixels * 3 &&
+          extra->target.size() == pixels * 3) {
+        const double norm = 1.0 / (3.0 * count);
+        for (std::size_t p = 0; p < pixels; ++p) {
+          if (!extra->mask[p]) continue;
+          for (int c = 0; c < 3; ++c) {
+            const double e =
+                double(extra_out.rgb[p * 3 + c]) - extra->target[p * 3 + c];
+            sum += e * e;
+            d_rgb_extra_[p * 3 + c] =
+                static_cast<float>(2.0 * extra->weight * norm * e);
+          }
+        }
+        report.extra = extra->weight * sum * norm;
+        report.loss += report.extra;
+        Backprop(extra->camera, extra->time, extra_out, d_rgb_extra_, {});
+      }
+    }
+  }
+  if (scene_.has_motion() && options_.smoothness_weight > 0) {
+    report.smoothness = MotionSmoothnessLoss(
+        scene_.bases, options_.smoothness_weight, &basis_grads_);
+    report.loss += report.smoothness;
+  }
+  times_.backward += Since(start) - (times_.motion - motion_before);
+
+  start = Clock::now();
+  UpdateLearningRates();
+  report.skipped_rows +=
+      static_adam_
+          .Step({&static_grads_.means, &static_grads_.log_scales,
+                 &static_grads_.quats, &static_grads_.opacities,
+                 &static_grads_.sh})
+          .skipped_rows;
+  if (scene_.has_motion()) {
+    report.skipped_rows +=
+        dynamic_adam_
+            .Step({&dynamic_grads_.means, &dynamic_grads_.log_scales,
+                   &dynamic_grads_.quats, &dynamic_grads_.opacities,
+                   &dynamic_grads_.sh, &logit_grads_})
+            .skipped_rows;
+    report.skipped_rows +=
+        basis_adam_.Step({&basis_grads_.rotations, &basis_grads_.translations})
+            .skipped_rows;
+  }
+  skipped_rows_total_ += report.skipped_rows;
+  times_.optimise += Since(start);
+  ++iteration_;
+  report.iteration = iteration_;
+
+  start = Clock::now();
+  const std::int64_t it = iteration_;
+  if (it >= options_.densify_from && it < options_.densify_until &&
+      it % options_.densify_every == 0) {
+    Densify(reset_done_);
+  }
+  if (it < options_.densify_until && it % options_.opacity_reset_every == 0) {
+    ResetOpacities();
+  }
+  times_.densify += Since(start);
+  return report;
+}
+
+void Trainer::Densify(bool prune_large) {
+  const std::size_t ns = scene_.statics.size();
+  const double threshold = options_.densify_gradient;
+  const double dense = options_.percent_dense * extent_;
+  std::normal_distribution<float> normal;
+
+  struct Candidate {
+    float gradient;
+    std::uint32_t row;  // in the composed order
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t i = 0; i < grad_accum_.size(); ++i) {
+    if (grad_count_[i] == 0) continue;
+    const float g = grad_accum_[i] / grad_count_[i];
+    if (g >= threshold)
+      candidates.push_back({g, static_cast<std::uint32_t>(i)});
+  }
+  // At the cap, the largest gradients go first.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) {
+                     return a.gradient > b.gradient;
+                   });
+  const std::int64_t budget = std::max<std::int64_t>(
+      0, options_.max_gaussians - static_cast<std::int64_t>(scene_.size()));
+  if (static_cast<std::int64_t>(candidates.size()) > budget)
+    candidates.resize(budget);
+  std::sort(
+      candidates.begin(), candidates.end(),
+      [](const Candidate& a, const Candidate& b) { return a.row < b.row; });
+
+  std::int64_t added = 0, removed = 0;
+  const auto process = [&](GaussianModel* model, std::vector<float>* logits,
+                           int k, Adam* adam, std::size_t offset,
+                           std::size_t count) {
+    if (count == 0) return;
+    std::vector<std::uint32_t> clone, split;
+    for (const Candidate& c : candidates) {
+      if (c.row < offset || c.row >= offset + count) continue;
+      const std::uint32_t r = c.row - static_cast<std::uint32_t>(offset);
+      const float* s = &model->log_scales[r * 3];
+      const float largest = std::exp(std::max({s[0], s[1], s[2]}));
+      (largest > dense ? split : clone).push_back(r);
+    }
+    // Clones: exact copies (their gradients will differ from the next step).
+    AppendGaussianRows(*model, clone, model);
+    if (logits) AppendRows(clone, k, logits);
+    // Splits: kSplitSamples samples drawn from the Gaussian, scales shrunk.
+    std::vector<std::uint32_t> split_rows;
+    for (std::uint32_t r : split)
+      for (int j = 0; j < kSplitSamples; ++j) split_rows.push_back(r);
+    const std::size_t first_split = model->size();
+    AppendGaussianRows(*model, split_rows, model);
+    if (logits) AppendRows(split_rows, k, logits);
+    for (std::size_t j = 0; j < split_rows.size(); ++j) {
+      const std::size_t row = first_split + j;
+      float* mean = &model->means[row * 3];
+      float* ls = &model->log_scales[row * 3];
+      const float* q = &model->quats[row * 4];
+      Eigen::Quaternionf rot(q[0], q[1], q[2], q[3]);
+      if (rot.norm() < kMinQuaternionNorm) rot = Eigen::Quaternionf::Identity();
+      rot.normalize();
+      Eigen::Vector3f local;
+      for (int c = 0; c < 3; ++c) local[c] = std::exp(ls[c]) * normal(rng_);
+      const Eigen::Vector3f offset_world = rot * local;
+      for (int c = 0; c < 3; ++c) {
+        mean[c] += offset_world[c];
+        ls[c] -= std::log(kSplitScaleDivisor);
+      }
+    }
+    adam->AppendRows(
+        static_cast<std::int64_t>(clone.size() + split_rows.size()));
+    added += static_cast<std::int64_t>(clone.size() + split_rows.size());
+
+    // Remove split originals and pruned Gaussians.
+    std::vector<std::uint8_t> keep(model->size(), 1);
+    for (std::uint32_t r : split) keep[r] = 0;
+    for (std::size_t i = 0; i < model->size(); ++i) {
+      if (Sigmoid(model->opacities[i]) < options_.prune_opacity) keep[i] = 0;
+      if (prune_large) {
+        const float* s = &model->log_scales[i * 3];
+        const float largest = std::exp(std::max({s[0], s[1], s[2]}));
+        const bool too_wide = largest > kMaxWorldScaleFraction * extent_;
+        const bool too_big_on_screen =
+            i < count && max_radius_[offset + i] > options_.max_screen_radius;
+        if (too_wide || too_big_on_screen) keep[i] = 0;
+      }
+    }
+    const std::size_t before = model->size();
+    KeepGaussianRows(keep, model);
+    if (logits) KeepRows(keep, k, logits);
+    adam->KeepRows(keep);
+    removed += static_cast<std::int64_t>(before - model->size()) -
+               static_cast<std::int64_t>(split.size());
+  };
+  const std::size_t nd = scene_.dynamics.size();
+  process(&scene_.statics, nullptr, 0, &static_adam_, 0, ns);
+  process(&scene_.dynamics, &scene_.logits, scene_.bases.num_bases,
+          &dynamic_adam_, ns, nd);
+  densified_total_ += added;
+  pruned_total_ += removed;
+  const std::size_t n = scene_.size();
+  grad_accum_.assign(n, 0.0f);
+  max_radius_.assign(n, 0.0f);
+  grad_count_.assign(n, 0);
+}
+
+void Trainer::ResetOpacities() {
+  const float cap = InverseSigmoid(kResetOpacity);
+  for (float& o : scene_.statics.opacities) o = std::min(o, cap);
+  for (float& o : scene_.dynamics.opacities) o = std::min(o, cap);
+  // 3DGS replaces the opacity tensor: its optimiser state starts afresh.
+  for (Adam* adam : {&static_adam_, &dynamic_adam_}) {
+    for (int g = 0; g < adam->groups(); ++g) {
+      if (adam->name(g) != "opacities") continue;
+      std::fill(adam->first_moment(g).begin(), adam->first_moment(g).end(),
+                0.0f);
+      std::fill(adam->second_moment(g).begin(), adam->second_moment(g).end(),
+                0.0f);
+    }
+  }
+  reset_done_ = true;
+}
+
+// Checkpoint layout: 8-byte magic, uint64 header length, JSON header, then
+// the arrays the header lists, float32 little-endian, in order.
+void Trainer::SaveCheckpoint(const fs::path& path) const {
+  std::vector<std::pair<std::string, const std::vector<float>*>> arrays;
+  const auto add_model = [&](const std::string& prefix,
+                             const GaussianModel& m) {
+    arrays.push_back({prefix + "means", &m.means});
+    arrays.push_back({prefix + "log_scales", &m.log_scales});
+    arrays.push_back({prefix + "quats", &m.quats});
+    arrays.push_back({prefix + "opacities", &m.opacities});
+    arrays.push_back({prefix + "sh", &m.sh});
+  };
+  add_model("static.", scene_.statics);
+  add_model("dynamic.", scene_.dynamics);
+  arrays.push_back({"logits", &scene_.logits});
+  arrays.push_back({"bases.rotations", &scene_.bases.rotations});
+  arrays.push_back({"bases.translations", &scene_.bases.translations});
+  Trainer& self = const_cast<Trainer&>(*this);  // moment accessors
+  nlohmann::json adams = nlohmann::json::object();
+  for (auto [name, adam] : {std::pair{"static", &self.static_adam_},
+                            {"dynamic", &self.dynamic_adam_},
+                            {"basis", &self.basis_adam_}}) {
+    adams[name] = adam->step();
+    for (int g = 0; g < adam->groups(); ++g) {
+      arrays.push_back(
+          {std::string("adam.") + name + "." + adam->name(g) + ".m",
+           &adam->first_moment(g)});
+      arrays.push_back(
+          {std::string("adam.") + name + "." + adam->name(g) + ".v",
+           &adam->second_moment(g)});
+    }
+  }
+  std::vector<float> counts(grad_count_.begin(), grad_count_.end());
+  arrays.push_back({"densify.gradient", &grad_accum_});
+  arrays.push_back({"densify.count", &counts});
+  arrays.push_back({"densify.radius", &max_radius_});
+
+  std::ostringstream rng_state;
+  rng_state << rng_;
+  std::vector<std::string> names;
+  for (const TrainingView& v : views_) names.push_back(v.name);
+  nlohmann::json header = {{"format", "pano4d checkpoint 1"},
+                           {"iteration", iteration_},
+                           {"options", options_.ToJson()},
+                           {"views", names},
+                           {"rng", rng_state.str()},
+                           {"order", order_},
+                           {"order_pos", order_pos_},
+                           {"reset_done", reset_done_},
+                           {"adam_steps", adams},
+                           {"sh_degree", scene_.statics.sh_degree},
+                           {"num_times", scene_.num_times},
+                           {"canonical_time", scene_.canonical_time},
+                           {"num_bases", scene_.bases.num_bases},
+                           {"counters",
+                            {skipped_rows_total_, skipped_steps_total_,
+                             densified_total_, pruned_total_}}};
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& [name, values] : arrays)
+    list.push_back({{"name", name}, {"count", values->size()}});
+  header["arrays"] = list;
+  const std::string text = header.dump();
+  WriteAtomically(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    out.write(kCheckpointMagic, sizeof(kCheckpointMagic));
+    const std::uint64_t length = text.size();
+    out.write(reinterpret_cast<const char*>(&length), sizeof(length));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    for (const auto& [name, values] : arrays) {
+      out.write(reinterpret_cast<const char*>(values->data()),
+                static_cast<std::streamsize>(values->size() * sizeof(float)));
+    }
+    out.flush();
+    if (!out) throw Error(tmp.string(), "", "", "write failed (disk full?)");
+  });
+}
+
+void Trainer::LoadCheckpoint(const fs::path& path) {
+  try {
+    LoadCheckpointUnchecked(path);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), "header", "",
+                std::string("malformed checkpoint header: ") + e.what());
+  }
+}
+
+namespace {
+
+// A checkpoint file read into memory: its JSON header and where each array
+// lies.
+struct CheckpointFile {
+  std::string source;
+  std::vector<std::uint8_t> bytes;
+  Json header;
+  std::map<std::string, std::pair<std::size_t, std::size_t>> arrays;
+
+  explicit CheckpointFile(const fs::path& path) : source(path.string()) {
+    bytes = ReadFileBytes(path);
+    constexpr std::size_t kPrefix = sizeof(kCheckpointMagic) + 8;
+    if (bytes.size() < kPrefix ||
+        std::memcmp(bytes.data(), kCheckpointMagic, sizeof(kCheckpointMagic))) {
+      throw Error(source, "magic", "", "not a pano4d checkpoint");
+    }
+    std::uint64_t length = 0;
+    std::memcpy(&length, bytes.data() + sizeof(kCheckpointMagic), 8);
+    if (length > bytes.size() - kPrefix) {
+      throw Error(source, "header length", std::to_string(length),
+                  "larger than the file (truncated?)");
+    }
+    header = ParseJson(
+        std::string_view(reinterpret_cast<const char*>(bytes.data() + kPrefix),
+                         length),
+        source);
+    std::size_t offset = kPrefix + length;
+    for (const Json& a : header.at("arrays")) {
+      const std::size_t count = a.at("count").get<std::size_t>();
+      const std::string name = a.at("name").get<std::string>();
+      if (count > (bytes.size() - offset) / sizeof(float)) {
+        throw Error(source, "array " + name, std::to_string(count),
+                    "extends past the end (truncated?)");
+      }
+      arrays[name] = {offset, count};
+      offset += count * sizeof(float);
+    }
+    if (offset != bytes.size()) {
+      throw Error(source, "size", std::to_string(bytes.size()),
+                  "trailing bytes after the arrays (corrupt?)");
+    }
+  }
+
+  void Read(const std::string& name, std::vector<float>* dst) const {
+    const auto it = arrays.find(name);
+    if (it == arrays.end()) throw Error(source, "array", name, "missing");
+    dst->resize(it->second.second);
+    std::memcpy(dst->data(), bytes.data() + it->second.first,
+                it->second.second * sizeof(float));
+    for (float v : *dst) {
+      if (!std::isfinite(v)) {
+        throw Error(source, "array " + name, std::to_string(v),
+                    "holds a non-finite value");
+      }
+    }
+  }
+
+  GaussianScene Scene() const {
+    GaussianScene scene;
+    const int sh = header.at("sh_degree").get<int>();
+    scene.statics.sh_degree = scene.dynamics.sh_degree = sh;
+    scene.num_times = header.at("num_times").get<int>();
+    scene.canonical_time = header.at("canonical_time").get<int>();
+    const int k = header.at("num_bases").get<int>();
+    scene.bases.num_bases = k;
+    scene.bases.num_times = k > 0 ? scene.num_times : 0;
+    const auto read_model = [&](const std::string& prefix, GaussianModel* m) {
+      Read(prefix + "means", &m->means);
+      Read(prefix + "log_scales", &m->log_scales);
+      Read(prefix + "quats", &m->quats);
+      Read(prefix + "opacities", &m->opacities);
+      Read(prefix + "sh", &m->sh);
+    };
+    read_model("static.", &scene.statics);
+    read_model("dynamic.", &scene.dynamics);
+    Read("logits", &scene.logits);
+    Read("bases.rotations", &scene.bases.rotations);
+    Read("bases.translations", &scene.bases.translations);
+    scene.Check();
+    return scene;
+  }
+};
+
+}  // namespace
+
+GaussianScene ReadCheckpointScene(const fs::path& path) {
+  try {
+    return CheckpointFile(path).Scene();
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), "header", "",
+                std::string("malformed checkpoint header: ") + e.what());
+  }
+}
+
+void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
+  const CheckpointFile file(path);
+  const std::string& source = file.source;
+  const Json& header = file.header;
+  std::vector<std::string> names;
+  for (const TrainingView& v : views_) names.push_back(v.name);
+  if (header.at("views").get<std::vector<std::string>>() != names) {
+    throw Error(source, "views", "",
+                "the checkpoint belongs to other frames "
+                "(delete it or use another workspace)");
+  }
+  nlohmann::json saved_options = header.at("options");
+  nlohmann::json current = options_.ToJson();
+  if (saved_options != current) {
+    throw Error(source, "options", "",
+                "the checkpoint was written with other fit options (run with "
+                "the same options, or without --resume to start over)");
+  }
+  if (header.at("num_bases").get<int>() != scene_.bases.num_bases ||
+      header.at("sh_degree").get<int>() != scene_.statics.sh_degree ||
+      header.at("num_times").get<int>() != scene_.num_times) {
+    throw Error(source, "scene", "",
+                "motion bases, SH degree or times differ "
+                "from this workspace's scene");
+  }
+
+  // The scene's arrays (densification changed the row counts), then the
+  // optimisers' moments, which follow them.
+  {
+    GaussianScene loaded = file.Scene();
+    scene_.statics = std::move(loaded.statics);
+    scene_.dynamics = std::move(loaded.dynamics);
+    scene_.logits = std::move(loaded.logits);
+    scene_.bases = std::move(loaded.bases);
+    scene_.canonical_time = loaded.canonical_time;
+  }
+  const auto read = [&](const std::string& name, std::vector<float>* dst) {
+    file.Read(name, dst);
+  };
+  for (auto [name, adam] : {std::pair{"static", &static_adam_},
+                            {"dynamic", &dynamic_adam_},
+                            {"basis", &basis_adam_}}) {
+    for (int g = 0; g < adam->groups(); ++g) {
+      read(std::string("adam.") + name + "." + adam->name(g) + ".m",
+           &adam->first_moment(g));
+      read(std::string("adam.") + name + "." + adam->name(g) + ".v",
+           &adam->second_moment(g));
+    }
+    adam->set_step(header.at("adam_steps").at(name).get<std::int64_t>());
+    adam->RestoreRows();
+  }
+  std::vector<float> counts;
+  read("densify.gradient", &grad_accum_);
+  read("densify.count", &counts);
+  read("densify.radius", &max_radius_);
+  grad_count_.assign(counts.begin(), counts.end());
+  if (grad_accum_.size() != scene_.size() || counts.size() != scene_.size() ||
+      max_radius_.size() != scene_.size()) {
+    throw Error(source, "densify", "", "statistics do not match the model");
+  }
+  std::istringstream rng_state(header.at("rng").get<std::string>());
+  rng_state >> rng_;
+  order_ = header.at("order").get<std::vector<int>>();
+  order_pos_ = header.at("order_pos").get<std::size_t>();
+  reset_done_ = header.at("reset_done").get<bool>();
+  iteration_ = header.at("iteration").get<std::int64_t>();
+  const std::vector<std::int64_t> counters =
+      header.at("counters").get<std::vector<std::int64_t>>();
+  if (counters.size() == 4) {
+    skipped_rows_total_ = counters[0];
+    skipped_steps_total_ = counters[1];
+    densified_total_ = counters[2];
+    pruned_total_ = counters[3];
+  }
+  UpdateLearningRates();
+}
+
+}  // namespace pano4d

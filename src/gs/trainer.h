@@ -1,0 +1,197 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "src/core/frames.h"
+#include "src/gs/adam.h"
+#include "src/gs/scene.h"
+#include "src/render/rasterizer.h"
+
+namespace pano4d {
+
+// A training frame in memory, at the resolution of its camera.
+struct TrainingView {
+  std::string name;
+  int time = 0;
+  RasterCamera camera;
+  std::vector<float> rgb;             // H x W x 3
+  std::vector<float> depth;           // H x W z-depth, 0 = none; may be empty
+  std::vector<std::uint8_t> dynamic;  // H x W, 1 = dynamic; may be empty
+};
+
+// Reads the images, depth maps and dynamic masks of `frames`. Throws
+// pano4d::Error naming the file that is missing, of another size than its
+// camera, or holds NaN.
+std::vector<TrainingView> LoadTrainingViews(
+    const std::vector<WorkspaceFrame>& frames);
+
+struct TrainerOptions {
+  int iterations = 10000;
+  std::uint64_t seed = 0;
+  // Losses: (1 - ssim_weight) L1 + ssim_weight D-SSIM on the video; plus
+  // depth_weight times the mean |rendered - given| / median given depth
+  // over pixels with depth; plus the bases' acceleration penalty.
+  double ssim_weight = 0.2;
+  double depth_weight = 0.1;
+  double smoothness_weight = 1.0;
+  // Learning rates (3DGS's; positions, basis translations times the scene
+  // extent, decayed log-linearly to 1/100 over the run).
+  double lr_mean = 1.6e-4;
+  double lr_log_scale = 5e-3;
+  double lr_quat = 1e-3;
+  double lr_opacity = 5e-2;
+  double lr_sh = 2.5e-3;
+  double lr_logit = 1e-2;
+  double lr_basis_rotation = 1e-3;
+  double lr_basis_translation = 1.6e-3;
+  // Densification (3DGS): every densify_every iterations in
+  // [densify_from, densify_until), Gaussians whose mean screen-space
+  // gradient (in NDC units) exceeds the threshold are cloned when small
+  // (largest scale <= percent_dense x extent) and split in two when large.
+  int densify_from = 500;
+  int densify_until = -1;  // -1: half the iterations
+  int densify_every = 100;
+  double densify_gradient = 2e-4;
+  double percent_dense = 0.01;
+  // Pruning: opacity below this; after the first opacity reset also screen
+  // radius above max_screen_radius pixels or scale above 0.1 extent.
+  double prune_opacity = 0.005;
+  double max_screen_radius = 20.0;
+  // Opacities are reset to at most 0.01 every this many iterations while
+  // densifying (3DGS), so that floaters can fade and be pruned.
+  int opacity_reset_every = 3000;
+  std::int64_t max_gaussians = 1000000;
+  Eigen::Vector3f background = Eigen::Vector3f::Zero();
+
+  void Check() const;  // throws pano4d::Error naming the field
+  nlohmann::json ToJson() const;
+};
+
+// What the expansion stage adds to a step (DESIGN.md, eq. refine): a view
+// at `camera` and `time` whose masked pixels should look like `target`;
+// loss weight * mean over the mask of |render - target|^2.
+struct ExtraView {
+  RasterCamera camera;
+  int time = 0;
+  std::vector<float> target;       // H x W x 3
+  std::vector<std::uint8_t> mask;  // H x W, 1 = supervised
+  double weight = 0.1;
+};
+
+struct StepReport {
+  std::int64_t iteration = 0;  // after the step
+  double loss = 0.0;           // total
+  double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0;
+  double psnr = 0.0;              // of this step's training view
+  std::int64_t skipped_rows = 0;  // Gaussians with non-finite gradients
+  bool skipped_step = false;      // the loss itself was not finite
+};
+
+// Time spent per phase, seconds, for the closing summary.
+struct PhaseTimes {
+  double compose = 0, forward = 0, loss = 0, backward = 0, motion = 0,
+         optimise = 0, densify = 0;
+};
+
+// The scene stored in a checkpoint (to construct the Trainer that
+// LoadCheckpoint then restores). Throws pano4d::Error naming the file when
+// it is not a pano4d checkpoint, is truncated or holds non-finite values.
+GaussianScene ReadCheckpointScene(const std::filesystem::path& path);
+
+class Trainer {
+ public:
+  Trainer(GaussianScene scene, std::vector<TrainingView> views,
+          TrainerOptions options);
+  // The optimisers hold pointers into the scene: not copyable or movable.
+  Trainer(const Trainer&) = delete;
+  Trainer& operator=(const Trainer&) = delete;
+
+  // One iteration: a training view (each once per shuffled epoch), render,
+  // losses, backward, Adam, densification on schedule. Non-finite gradients
+  // are skipped row by row (counted in the report); a non-finite loss skips
+  // the whole step. Both are logged.
+  StepReport Step();
+  bool Done() const { return iteration_ >= options_.iterations; }
+  std::int64_t iteration() const { return iteration_; }
+
+  // Renders the scene at `time` (between steps).
+  void Render(const RasterCamera& camera, int time, RenderOutput* out);
+
+  // The expansion stage's hook: called at every step; a view returned is
+  // rendered and its loss added to the step.
+  std::function<const ExtraView*(std::int64_t iteration)> extra_view;
+  // Tests only: called with the composed model's gradients before the
+  // optimiser sees them (e.g. to inject a NaN).
+  std::function<void(GaussianGradients*)> gradient_hook;
+
+  // Everything a resumed run needs to continue as if never stopped
+  // (parameters, optimiser moments, densification statistics, the random
+  // generator, the epoch order), written atomically.
+  void SaveCheckpoint(const std::filesystem::path& path) const;
+  // Throws pano4d::Error naming the file when it is corrupt or belongs to
+  // another scene (other views or options).
+  void LoadCheckpoint(const std::filesystem::path& path);
+
+  const GaussianScene& scene() const { return scene_; }
+  const TrainerOptions& options() const { return options_; }
+  const PhaseTimes& times() const { return times_; }
+  double extent() const { return extent_; }
+  std::int64_t skipped_rows_total() const { return skipped_rows_total_; }
+  std::int64_t skipped_steps_total() const { return skipped_steps_total_; }
+  std::int64_t densified_total() const { return densified_total_; }
+  std::int64_t pruned_total() const { return pruned_total_; }
+
+ private:
+  void RegisterGroups();
+  void LoadCheckpointUnchecked(const std::filesystem::path& path);
+  int NextView();
+  void Densify(bool prune_large);
+  void ResetOpacities();
+  void UpdateLearningRates();
+  void Backprop(const RasterCamera& camera, int time, const RenderOutput& out,
+                const std::vector<float>& d_rgb,
+                const std::vector<float>& d_depth);
+
+  TrainerOptions options_;
+  GaussianScene scene_;
+  std::vector<TrainingView> views_;
+  double extent_ = 1.0;
+  std::vector<float> median_depth_;  // per view, 0 when it has none
+
+  Adam static_adam_, dynamic_adam_, basis_adam_;
+  int static_mean_group_ = -1, dynamic_mean_group_ = -1,
+      basis_translation_group_ = -1;
+  // Densification statistics per Gaussian (static rows, then dynamic).
+  std::vector<float> grad_accum_, max_radius_;
+  std::vector<std::int32_t> grad_count_;
+
+  std::mt19937_64 rng_;
+  std::vector<int> order_;
+  std::size_t order_pos_ = 0;
+  std::int64_t iteration_ = 0;
+  bool reset_done_ = false;
+
+  // Per-step buffers, reused.
+  Rasterizer rasterizer_;
+  GaussianModel composed_;
+  RenderOutput out_;
+  GaussianGradients grads_;
+  ProjectedGradients grads2d_;
+  std::vector<float> d_rgb_, d_depth_, d_rgb_extra_;
+  GaussianGradients static_grads_, dynamic_grads_;
+  std::vector<float> logit_grads_;
+  MotionBases basis_grads_;
+
+  PhaseTimes times_;
+  std::int64_t skipped_rows_total_ = 0, skipped_steps_total_ = 0;
+  std::int64_t densified_total_ = 0, pruned_total_ = 0;
+};
+
+}  // namespace pano4d
