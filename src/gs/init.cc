@@ -24,7 +24,7 @@ constexpr double kMaxScaleVoxels = 8.0;
 constexpr int kVotingTracks = 8;
 // Added to each basis' share of the votes before the log: every basis keeps
 // some weight, so its gradient never vanishes.
-constexpr float kVoteFloor = 0.02f;
+constexpr float kVoteFloor = 1e-3f;
 // Procrustes inliers: residual within this many times the median.
 constexpr double kInlierFactor = 3.0;
 

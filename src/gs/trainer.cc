@@ -125,6 +125,11 @@ void TrainerOptions::Check() const {
   }
   non_negative(depth_weight, "depth_weight");
   non_negative(smoothness_weight, "smoothness_weight");
+  non_negative(anisotropy_weight, "anisotropy_weight");
+  if (!(max_anisotropy >= 1)) {
+    throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
+                "must be at least 1");
+  }
   for (auto [v, name] : {std::pair{lr_mean, "lr_mean"},
                          {lr_log_scale, "lr_log_scale"},
                          {lr_quat, "lr_quat"},
@@ -149,6 +154,8 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"ssim_weight", ssim_weight},
           {"depth_weight", depth_weight},
           {"smoothness_weight", smoothness_weight},
+          {"anisotropy_weight", anisotropy_weight},
+          {"max_anisotropy", max_anisotropy},
           {"lr_mean", lr_mean},
           {"lr_log_scale", lr_log_scale},
           {"lr_quat", lr_quat},
@@ -456,6 +463,25 @@ StepReport Trainer::Step() {
         Backprop(extra->camera, extra->time, extra_out, d_rgb_extra_, {});
       }
     }
+  }
+  if (options_.anisotropy_weight > 0 && scene_.size() > 0) {
+    const double norm = options_.anisotropy_weight / scene_.size();
+    const auto shape = [&](const std::vector<float>& log_scales,
+                           std::vector<float>* grads) {
+      for (std::size_t i = 0; i * 3 < log_scales.size(); ++i) {
+        const float* s = &log_scales[i * 3];
+        const int hi = static_cast<int>(std::max_element(s, s + 3) - s);
+        const int lo = static_cast<int>(std::min_element(s, s + 3) - s);
+        const double ratio = std::exp(double(s[hi]) - s[lo]);
+        if (ratio <= options_.max_anisotropy) continue;
+        report.anisotropy += norm * (ratio - options_.max_anisotropy);
+        (*grads)[i * 3 + hi] += static_cast<float>(norm * ratio);
+        (*grads)[i * 3 + lo] -= static_cast<float>(norm * ratio);
+      }
+    };
+    shape(scene_.statics.log_scales, &static_grads_.log_scales);
+    shape(scene_.dynamics.log_scales, &dynamic_grads_.log_scales);
+    report.loss += report.anisotropy;
   }
   if (scene_.has_motion() && options_.smoothness_weight > 0) {
     report.smoothness = MotionSmoothnessLoss(

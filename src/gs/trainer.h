@@ -39,8 +39,14 @@ struct TrainerOptions {
   // depth_weight times the mean |rendered - given| / median given depth
   // over pixels with depth; plus the bases' acceleration penalty.
   double ssim_weight = 0.2;
-  double depth_weight = 0.1;
+  double depth_weight = 1.0;
   double smoothness_weight = 1.0;
+  // Shape regulariser (PhysGaussian's): anisotropy_weight times the mean
+  // over Gaussians of max(0, largest / smallest scale - max_anisotropy).
+  // Needle-like Gaussians fit the training rays and streak across every
+  // other view.
+  double anisotropy_weight = 0.1;
+  double max_anisotropy = 4.0;
   // Learning rates (3DGS's; positions, basis translations times the scene
   // extent, decayed log-linearly to 1/100 over the run).
   double lr_mean = 1.6e-4;
@@ -49,8 +55,8 @@ struct TrainerOptions {
   double lr_opacity = 5e-2;
   double lr_sh = 2.5e-3;
   double lr_logit = 1e-2;
-  double lr_basis_rotation = 1e-3;
-  double lr_basis_translation = 1.6e-3;
+  double lr_basis_rotation = 1e-4;
+  double lr_basis_translation = 1.6e-4;
   // Densification (3DGS): every densify_every iterations in
   // [densify_from, densify_until), Gaussians whose mean screen-space
   // gradient (in NDC units) exceeds the threshold are cloned when small
@@ -88,7 +94,8 @@ struct ExtraView {
 struct StepReport {
   std::int64_t iteration = 0;  // after the step
   double loss = 0.0;           // total
-  double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0;
+  double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0,
+         anisotropy = 0.0;
   double psnr = 0.0;              // of this step's training view
   std::int64_t skipped_rows = 0;  // Gaussians with non-finite gradients
   bool skipped_step = false;      // the loss itself was not finite

@@ -1,0 +1,205 @@
+// `pano4d depth` and `pano4d fit` as a user runs them, on the tiny synthetic
+// scene: outputs, metrics keys, errors, and kill -9 followed by --resume.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "src/core/file.h"
+#include "tests/support/test_files.h"
+
+extern char** environ;
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
+
+int RunPano4d(const std::string& args, const fs::path& log) {
+  const std::string command =
+      kBinary + " " + args + " > '" + log.string() + "' 2>&1";
+  const int raw = std::system(command.c_str());
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+}
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class FitBinaryTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    const fs::path dataset = dir_->path() / "tiny";
+    ASSERT_EQ(RunPano4d("synth --preset tiny --seed 3 --out '" +
+                            dataset.string() + "'",
+                        dir_->path() / "synth.log"),
+              0)
+        << Slurp(dir_->path() / "synth.log");
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  // A workspace with frames.json from the tiny dataset.
+  static fs::path Workspace(const std::string& name) {
+    const fs::path ws = dir_->path() / name;
+    const fs::path log = dir_->path() / (name + "_depth.log");
+    EXPECT_EQ(RunPano4d("depth --workspace '" + ws.string() + "' --dataset '" +
+                            (dir_->path() / "tiny").string() + "'",
+                        log),
+              0)
+        << Slurp(log);
+    return ws;
+  }
+
+  static testing::TempDir* dir_;
+};
+testing::TempDir* FitBinaryTest::dir_ = nullptr;
+
+TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
+  const fs::path ws = Workspace("ws_outputs");
+  const fs::path log = ws / "fit.log";
+  ASSERT_EQ(
+      RunPano4d("fit --workspace '" + ws.string() +
+                    "' --iterations 40 --validate-every 20 --log-every 10",
+                log),
+      0)
+      << Slurp(log);
+  EXPECT_TRUE(fs::exists(ws / "pano4d/checkpoints/fit.ckpt"));
+  const nlohmann::json metrics =
+      nlohmann::json::parse(Slurp(ws / "pano4d/metrics/metrics.json"));
+  for (const char* key : {"psnr", "ssim", "mpsnr", "mssim", "upsnr", "ussim"}) {
+    ASSERT_TRUE(metrics.at("mean").contains(key)) << key;
+    EXPECT_TRUE(metrics["mean"][key].is_number()) << key;
+  }
+  const nlohmann::json fit =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  EXPECT_EQ(fit.at("iterations").get<int>(), 40);
+  EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
+  EXPECT_GT(fit.at("motion_bases").get<int>(), 0);
+  // A row every 10 iterations, validation values at 20 and 40.
+  const std::string csv = Slurp(ws / "pano4d/metrics/fit.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5) << csv;
+  EXPECT_TRUE(fs::exists(ws / "pano4d/metrics/fit.png"));
+  int renders = 0;
+  for (const auto& e : fs::directory_iterator(ws / "pano4d/renders/val"))
+    renders += e.path().extension() == ".png";
+  EXPECT_EQ(renders, 16);  // tiny: 8 frames x 2 validation cameras
+  const std::string report = Slurp(log);
+  EXPECT_NE(report.find("pano4d fit report"), std::string::npos);
+  EXPECT_NE(report.find("validation"), std::string::npos);
+}
+
+TEST_F(FitBinaryTest, NoMotionHasNoMotionParameters) {
+  const fs::path ws = Workspace("ws_static");
+  const fs::path log = ws / "fit.log";
+  ASSERT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 5 --no-motion",
+                      log),
+            0)
+      << Slurp(log);
+  const nlohmann::json fit =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  EXPECT_EQ(fit.at("dynamic_gaussians").get<int>(), 0);
+  EXPECT_EQ(fit.at("motion_bases").get<int>(), 0);
+}
+
+TEST_F(FitBinaryTest, MissingFramesAndBadOptionsAreOneLineErrors) {
+  testing::TempDir empty;
+  const fs::path log = empty.path() / "log.txt";
+  EXPECT_EQ(RunPano4d("fit --workspace '" + empty.path().string() + "'", log),
+            1);
+  const std::string err = Slurp(log);
+  EXPECT_NE(err.find("frames.json"), std::string::npos) << err;
+  EXPECT_NE(err.find("pano4d depth"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(RunPano4d("fit --workspace '" + empty.path().string() +
+                          "' --deterministic --time-budget 10",
+                      log),
+            1);
+}
+
+// Starts pano4d in the background; returns its pid.
+pid_t Spawn(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<char*> argv;
+  std::vector<std::string> all = {kBinary};
+  all.insert(all.end(), args.begin(), args.end());
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, kBinary.c_str(), &actions, nullptr,
+                             argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
+  const std::vector<std::string> options = {
+      "--iterations",     "400", "--checkpoint-every", "25",
+      "--validate-every", "200", "--deterministic"};
+  // Uninterrupted.
+  const fs::path straight = Workspace("ws_straight");
+  {
+    std::string args = "fit --workspace '" + straight.string() + "'";
+    for (const std::string& o : options) args += " " + o;
+    ASSERT_EQ(RunPano4d(args, straight / "fit.log"), 0)
+        << Slurp(straight / "fit.log");
+  }
+  // Killed with SIGKILL once the first checkpoint is on disk, then resumed.
+  const fs::path killed = Workspace("ws_killed");
+  std::vector<std::string> args = {"fit", "--workspace", killed.string()};
+  args.insert(args.end(), options.begin(), options.end());
+  const pid_t pid = Spawn(args, killed / "fit1.log");
+  ASSERT_GT(pid, 0);
+  const fs::path ckpt = killed / "pano4d/checkpoints/fit.ckpt";
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(ckpt) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_TRUE(fs::exists(ckpt)) << Slurp(killed / "fit1.log");
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+      << "the run finished before it could be killed; the test proves "
+         "nothing";
+  EXPECT_FALSE(fs::exists(killed / "pano4d/fit.json"));
+  std::string resume = "fit --workspace '" + killed.string() + "' --resume";
+  for (const std::string& o : options) resume += " " + o;
+  ASSERT_EQ(RunPano4d(resume, killed / "fit2.log"), 0)
+      << Slurp(killed / "fit2.log");
+  const nlohmann::json a =
+      nlohmann::json::parse(Slurp(straight / "pano4d/fit.json"));
+  const nlohmann::json b =
+      nlohmann::json::parse(Slurp(killed / "pano4d/fit.json"));
+  EXPECT_GT(b.at("resumed_at").get<int>(), 0);
+  EXPECT_EQ(a.at("iterations"), b.at("iterations"));
+  EXPECT_EQ(a.at("metrics"), b.at("metrics"));
+  EXPECT_EQ(a.at("train_psnr"), b.at("train_psnr"));
+  // The final state, byte for byte.
+  EXPECT_TRUE(ReadFileBytes(straight / "pano4d/checkpoints/fit.ckpt") ==
+              ReadFileBytes(ckpt));
+}
+
+}  // namespace
+}  // namespace pano4d
