@@ -27,10 +27,26 @@
 #include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/geometry/depth_alignment.h"
+#include "src/geometry/stereo.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
 namespace {
+
+// Plane-sweep stereo settings: frames are matched at most this many
+// pixels on the long side (time; the fit's frames are usually smaller);
+// neighbours are the kStereoNeighbours other training frames whose
+// baseline / median depth is nearest kStereoBaselineRatio (wide enough to
+// resolve depth, narrow enough to match), at least kStereoMinBaselineRatio,
+// looking within kStereoMaxAngleDeg; the depth range is the frame's 2nd to
+// 98th percentile of SfM point depths widened by kStereoRangeMargin.
+constexpr int kStereoLongSide = 640;
+constexpr std::size_t kStereoNeighbours = 4;
+constexpr double kStereoBaselineRatio = 0.08;
+constexpr double kStereoMinBaselineRatio = 0.01;
+constexpr double kStereoMaxAngleDeg = 35.0;
+constexpr std::pair<double, double> kStereoRangeMargin = {0.7, 1.5};
+constexpr std::size_t kMinStereoPoints = 20;
 
 struct DepthCommandOptions {
   fs::path workspace;
@@ -324,6 +340,144 @@ void AlignExternalDepth(const DepthCommandOptions& o, const ColmapModel& model,
   }
 }
 
+// Plane-sweep stereo depth for every training frame of a COLMAP workspace
+// (DESIGN.md "depth"): neighbours among the other training frames chosen by
+// baseline, the depth range from the frame's sparse points, moving pixels
+// removed (the object moved between the frames); the SfM points check the
+// result (scale and median relative error in alignment.json).
+void StereoDepth(const DepthCommandOptions& o, const ColmapModel& model,
+                 WorkspaceFrames* frames) {
+  struct Info {
+    double near = 0, far = 0, median = 0;
+    std::vector<DepthSample> samples;
+  };
+  std::vector<Info> info(frames->train.size());
+  std::vector<double> all_depths;
+  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+    const WorkspaceFrame& f = frames->train[i];
+    const ColmapImage* image = nullptr;
+    for (const ColmapImage& im : model.images)
+      if (fs::path(im.name).stem().string() == f.name) image = &im;
+    std::vector<double> z;
+    if (image) {
+      for (const ColmapPoint2D& p : image->points2D) {
+        if (!p.HasPoint3D()) continue;
+        const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);
+        if (!point) continue;
+        const double depth = (f.camera.cam_from_world * point->xyz).z();
+        if (depth > 0) {
+          z.push_back(depth);
+          info[i].samples.push_back({p.xy, depth});
+        }
+      }
+    }
+    std::sort(z.begin(), z.end());
+    if (z.size() >= kMinStereoPoints) {
+      info[i].near = kStereoRangeMargin.first * z[z.size() * 2 / 100];
+      info[i].far = kStereoRangeMargin.second * z[z.size() * 98 / 100];
+      info[i].median = z[z.size() / 2];
+    }
+    all_depths.insert(all_depths.end(), z.begin(), z.end());
+  }
+  if (all_depths.size() < kMinStereoPoints) {
+    throw Error(o.workspace.string(), "sparse points",
+                std::to_string(all_depths.size()),
+                "too few SfM points to bound the stereo depth range");
+  }
+  std::sort(all_depths.begin(), all_depths.end());
+  for (Info& i : info) {
+    if (i.median > 0) continue;
+    i.near = kStereoRangeMargin.first * all_depths[all_depths.size() * 2 / 100];
+    i.far =
+        kStereoRangeMargin.second * all_depths[all_depths.size() * 98 / 100];
+    i.median = all_depths[all_depths.size() / 2];
+  }
+
+  // Grey frames at the working size.
+  std::vector<StereoView> views(frames->train.size());
+  std::vector<cv::Mat> dynamic(frames->train.size());
+  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+    const WorkspaceFrame& f = frames->train[i];
+    const Image image = ReadImage(f.rgb);
+    const int w = f.camera.camera.width, h = f.camera.camera.height;
+    const double s = std::min(1.0, double(kStereoLongSide) / std::max(w, h));
+    const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
+    const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
+    cv::Mat grey, small;
+    cv::cvtColor(image.mat(), grey, cv::COLOR_RGB2GRAY);
+    cv::resize(grey, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+    views[i].grey = small;
+    views[i].camera = f.camera;
+    views[i].camera.camera = f.camera.camera.Rescaled(sw, sh);
+    if (!f.dynamic_mask.empty()) dynamic[i] = ReadMask(f.dynamic_mask);
+  }
+
+  const fs::path out_dir = o.workspace / "pano4d" / "depth";
+  nlohmann::json report = nlohmann::json::array();
+  ProgressBar bar("stereo", static_cast<std::int64_t>(views.size()));
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    WorkspaceFrame& f = frames->train[i];
+    // Neighbours: baseline / median depth nearest kStereoBaselineRatio, at
+    // least kStereoMinBaselineRatio, viewing directions within
+    // kStereoMaxAngleDeg.
+    const Eigen::Vector3d c = f.camera.Center();
+    const Eigen::Vector3d axis =
+        f.camera.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    std::vector<std::pair<double, std::size_t>> candidates;
+    for (std::size_t j = 0; j < views.size(); ++j) {
+      if (j == i) continue;
+      const PosedCamera& other = frames->train[j].camera;
+      const double ratio = (other.Center() - c).norm() / info[i].median;
+      const Eigen::Vector3d other_axis =
+          other.cam_from_world.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+      const double angle =
+          std::acos(std::clamp(axis.dot(other_axis), -1.0, 1.0)) * 180 / M_PI;
+      if (ratio < kStereoMinBaselineRatio || angle > kStereoMaxAngleDeg)
+        continue;
+      candidates.push_back(
+          {std::abs(std::log(ratio / kStereoBaselineRatio)), j});
+    }
+    std::sort(candidates.begin(), candidates.end());
+    std::vector<StereoView> neighbours;
+    for (std::size_t k = 0; k < candidates.size() && k < kStereoNeighbours; ++k)
+      neighbours.push_back(views[candidates[k].second]);
+    bar.Add();
+    if (neighbours.empty()) {
+      PANO4D_LOG(kWarning) << "depth: frame " << f.name
+                           << " has no stereo neighbour with enough baseline; "
+                              "left without depth";
+      continue;
+    }
+    const cv::Mat small =
+        PlaneSweepDepth(views[i], neighbours, info[i].near, info[i].far);
+    cv::Mat depth;
+    cv::resize(small, depth,
+               cv::Size(f.camera.camera.width, f.camera.camera.height), 0, 0,
+               cv::INTER_NEAREST);
+    if (!dynamic[i].empty()) depth.setTo(0.0f, dynamic[i] >= 128);
+    f.depth = out_dir / (f.name + ".npy");
+    WriteDepth(f.depth, depth);
+    nlohmann::json entry = {
+        {"frame", f.name},
+        {"neighbours", neighbours.size()},
+        {"near", info[i].near},
+        {"far", info[i].far},
+        {"valid_fraction",
+         cv::countNonZero(depth) / static_cast<double>(depth.total())}};
+    try {
+      const DepthAlignment a = AlignDepth(depth, info[i].samples);
+      entry["check_scale"] = a.scale;
+      entry["check_shift"] = a.shift;
+      entry["check_median_relative_error"] = a.median_relative_error;
+    } catch (const Error& e) {
+      entry["check"] = e.what();
+    }
+    report.push_back(entry);
+  }
+  bar.Finish();
+  WriteJson(out_dir / "stereo.json", report);
+}
+
 int RunDepthCommand(const DepthCommandOptions& o) {
   if (o.factor < 1) {
     throw Error("--factor", "", std::to_string(o.factor), "must be >= 1");
@@ -336,18 +490,18 @@ int RunDepthCommand(const DepthCommandOptions& o) {
   WorkspaceFrames frames;
   if (!o.dataset.empty()) {
     frames = FramesFromDataset(o);
+    ComputeMissingMasks(o.workspace, &frames.train);
   } else {
     ColmapModel model;
     frames = FramesFromWorkspace(o, &model);
+    // Masks first: stereo leaves moving pixels without depth.
+    ComputeMissingMasks(o.workspace, &frames.train);
     if (o.depth_dir.empty()) {
-      throw Error("pano4d depth", "--depth-dir", "",
-                  "CPU stereo from the COLMAP poses is not built yet; pass "
-                  "--depth-dir with one depth map per frame from another "
-                  "tool, or --dataset for a dataset with depth");
+      StereoDepth(o, model, &frames);
+    } else {
+      AlignExternalDepth(o, model, &frames);
     }
-    AlignExternalDepth(o, model, &frames);
   }
-  ComputeMissingMasks(o.workspace, &frames.train);
   WriteWorkspaceFrames(o.workspace, frames);
   int with_depth = 0;
   for (const WorkspaceFrame& f : frames.train) with_depth += !f.depth.empty();

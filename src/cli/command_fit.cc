@@ -23,6 +23,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/core/run_recorder.h"
 #include "src/core/timer.h"
@@ -255,10 +256,13 @@ int RunFitCommand(FitCommandOptions o) {
   std::optional<EvaluationResult> evaluation;
   if (!val.empty()) {
     const fs::path renders = ws / "pano4d" / "renders" / "val";
+    const fs::path depth_renders = ws / "pano4d" / "renders" / "val_depth";
     RenderOutput out;
     for (const ValidationView& v : val) {
       trainer.Render(v.camera, v.time, &out);
       WriteImage(renders / (v.name + ".png"), ToImage(out));
+      WriteNpy(depth_renders / (v.name + ".npy"),
+               NpyArray::FromFloats({out.height, out.width}, out.depth));
     }
     Dataset dataset;
     dataset.root = frames.dataset.empty() ? ws : frames.dataset;
@@ -422,7 +426,8 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "
       "WS/pano4d/metrics/fit.csv and fit.png (error against run time), and "
-      "with validation frames WS/pano4d/renders/val/ and "
+      "with validation frames WS/pano4d/renders/val/ (and z-depth in "
+      "renders/val_depth/<frame>.npy) and "
       "WS/pano4d/metrics/metrics.json (keys psnr, ssim, mpsnr, mssim, upsnr, "
       "ussim, ...).");
   sub->callback([action, o] { *action = [o] { return RunFitCommand(*o); }; });
