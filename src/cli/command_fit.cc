@@ -423,6 +423,9 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--depth-weight", o->trainer.depth_weight,
                   "Weight of the depth loss")
       ->capture_default_str();
+  sub->add_option("--smoothness-weight", o->trainer.smoothness_weight,
+                  "Weight of the motion bases' acceleration penalty")
+      ->capture_default_str();
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "
       "WS/pano4d/metrics/fit.csv and fit.png (error against run time), and "
