@@ -136,7 +136,7 @@ void RayDistanceToZ(const Camera& pinhole, cv::Mat* depth) {
 
 // Dynamic masks for frames that have none on disk: flow and epipolar
 // geometry over each camera's frames in time order (colmap_ext).
-void ComputeMissingMasks(const fs::path& ws,
+void ComputeMissingMasks(const fs::path& dir,
                          std::vector<WorkspaceFrame>* frames) {
   std::map<std::string, std::vector<WorkspaceFrame*>> by_camera;
   for (WorkspaceFrame& f : *frames) {
@@ -156,7 +156,6 @@ void ComputeMissingMasks(const fs::path& ws,
     }
     DynamicMaskStats stats;
     const std::vector<cv::Mat> masks = ComputeDynamicMasks(images, {}, &stats);
-    const fs::path dir = ws / "pano4d" / "tracks" / "dynamic";
     WriteDynamicMasks(masks, names, dir);
     for (std::size_t i = 0; i < list.size(); ++i)
       list[i]->dynamic_mask = MaskPathFor(dir, names[i]);
@@ -258,7 +257,11 @@ WorkspaceFrames FramesFromWorkspace(const DepthCommandOptions& o,
     f.camera.camera = AsPinhole(f.camera.camera, model_dir.string());
     f.rgb = images / sorted[i]->name;
     const fs::path mask = MaskPathFor(masks, sorted[i]->name);
-    if (fs::exists(mask)) f.dynamic_mask = mask;
+    if (fs::exists(mask)) {
+      const cv::Mat m = ReadMask(mask);
+      if (m.cols == f.camera.camera.width && m.rows == f.camera.camera.height)
+        f.dynamic_mask = mask;
+    }
     const bool held_out = o.holdout > 0 && i % o.holdout == 0;
     (held_out ? frames.val : frames.train).push_back(std::move(f));
   }
@@ -490,12 +493,17 @@ int RunDepthCommand(const DepthCommandOptions& o) {
   WorkspaceFrames frames;
   if (!o.dataset.empty()) {
     frames = FramesFromDataset(o);
-    ComputeMissingMasks(o.workspace, &frames.train);
+    ComputeMissingMasks(o.workspace / "pano4d" / "tracks" / "dynamic",
+                        &frames.train);
   } else {
     ColmapModel model;
     frames = FramesFromWorkspace(o, &model);
-    // Masks first: stereo leaves moving pixels without depth.
-    ComputeMissingMasks(o.workspace, &frames.train);
+    // Masks first: stereo leaves moving pixels without depth. The masks of
+    // `pano4d sfm` belong to the frames before undistortion; where the
+    // undistorted frames differ in size they are computed again on these.
+    ComputeMissingMasks(
+        o.workspace / "pano4d" / "tracks" / "dynamic_undistorted",
+        &frames.train);
     if (o.depth_dir.empty()) {
       StereoDepth(o, model, &frames);
     } else {

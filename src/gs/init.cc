@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <opencv2/photo.hpp>
 
 #include "src/core/error.h"
 #include "src/core/log.h"
@@ -27,6 +28,8 @@ constexpr int kVotingTracks = 8;
 constexpr float kVoteFloor = 1e-3f;
 // Procrustes inliers: residual within this many times the median.
 constexpr double kInlierFactor = 3.0;
+// Pixels around a hole that inpainting draws from.
+constexpr double kInpaintRadius = 5.0;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -41,12 +44,37 @@ Eigen::Vector3f Unproject(const RasterCamera& cam, float u, float v, float z) {
 }
 
 // Depth under a continuous pixel position (nearest pixel); 0 outside.
-float DepthAt(const TrainingView& view, const Eigen::Vector2f& p) {
+float DepthAt(const std::vector<float>& depth, const RasterCamera& camera,
+              const Eigen::Vector2f& p) {
   const int x = static_cast<int>(std::floor(p.x()));
   const int y = static_cast<int>(std::floor(p.y()));
-  if (x < 0 || y < 0 || x >= view.camera.width || y >= view.camera.height)
-    return 0.0f;
-  return view.depth[static_cast<std::size_t>(y) * view.camera.width + x];
+  if (x < 0 || y < 0 || x >= camera.width || y >= camera.height) return 0.0f;
+  return depth[static_cast<std::size_t>(y) * camera.width + x];
+}
+
+// The view's depth with its moving pixels that have none (stereo cannot
+// match an object that moved between the frames) filled by inpainting
+// (OpenCV Telea) from the depth around them: a rough start for the dynamic
+// Gaussians, which the fit then moves. Other pixels are left as they are.
+std::vector<float> DepthForMotion(const TrainingView& v) {
+  std::vector<float> out = v.depth;
+  if (v.depth.empty() || v.dynamic.empty()) return out;
+  const int w = v.camera.width, h = v.camera.height;
+  bool missing = false;
+  for (std::size_t p = 0; p < out.size() && !missing; ++p)
+    missing = v.dynamic[p] && !(out[p] > 0);
+  if (!missing) return out;
+  cv::Mat depth(h, w, CV_32F, out.data());
+  cv::Mat holes = depth <= 0;
+  if (cv::countNonZero(holes) == static_cast<int>(depth.total())) return out;
+  cv::Mat filled;
+  cv::inpaint(depth, holes, filled, kInpaintRadius, cv::INPAINT_TELEA);
+  for (std::size_t p = 0; p < out.size(); ++p) {
+    if (v.dynamic[p] && !(out[p] > 0))
+      out[p] =
+          filled.at<float>(static_cast<int>(p / w), static_cast<int>(p % w));
+  }
+  return out;
 }
 
 // Keeps every k-th point so that at most `max` remain (deterministic).
@@ -176,15 +204,22 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
   canonical = std::clamp(canonical, 0, num_times - 1);
   report.canonical_time = canonical;
 
+  std::vector<std::vector<float>> motion_depth(views.size());
+  if (any_dynamic) {
+    for (std::size_t i = 0; i < views.size(); ++i)
+      motion_depth[i] = DepthForMotion(views[i]);
+  }
   PointCloud statics, dynamics;
-  for (const TrainingView& v : views) {
+  for (std::size_t vi = 0; vi < views.size(); ++vi) {
+    const TrainingView& v = views[vi];
     if (v.depth.empty()) continue;
     const int w = v.camera.width, h = v.camera.height;
     const bool is_canonical = v.time == canonical;
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const std::size_t p = static_cast<std::size_t>(y) * w + x;
-        const float z = v.depth[p];
+        const bool moving = any_dynamic && !v.dynamic.empty() && v.dynamic[p];
+        const float z = moving ? motion_depth[vi][p] : v.depth[p];
         if (!(z > 0)) continue;
         const bool dynamic = any_dynamic && !v.dynamic.empty() && v.dynamic[p];
         const bool on_grid = x % o.pixel_stride == 0 && y % o.pixel_stride == 0;
@@ -225,10 +260,17 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
   // Tracks from the canonical frame's dynamic pixels.
   const TrainingView* ref = nullptr;
   std::vector<const TrainingView*> by_time(num_times, nullptr);
-  for (const TrainingView& v : views) {
-    if (!by_time[v.time]) by_time[v.time] = &v;
-    if (v.time == canonical && !v.depth.empty() && !v.dynamic.empty() && !ref)
+  std::vector<const std::vector<float>*> depth_at(num_times, nullptr);
+  for (std::size_t vi = 0; vi < views.size(); ++vi) {
+    const TrainingView& v = views[vi];
+    if (!by_time[v.time]) {
+      by_time[v.time] = &v;
+      depth_at[v.time] = &motion_depth[vi];
+    }
+    if (v.time == canonical && !v.depth.empty() && !v.dynamic.empty() && !ref) {
       ref = &v;
+      depth_at[canonical] = &motion_depth[vi];
+    }
   }
   by_time[canonical] = ref;
   std::vector<cv::Mat> frames(num_times);
@@ -244,7 +286,9 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
   for (int y = 0; y < ref->camera.height; y += o.track_stride)
     for (int x = 0; x < ref->camera.width; x += o.track_stride)
       if (ref->dynamic[static_cast<std::size_t>(y) * ref->camera.width + x] &&
-          ref->depth[static_cast<std::size_t>(y) * ref->camera.width + x] > 0)
+          (*depth_at[canonical])[static_cast<std::size_t>(y) *
+                                     ref->camera.width +
+                                 x] > 0)
         seeds.emplace_back(x + 0.5f, y + 0.5f);
   const Tracks2D tracks2d = ChainFlowTracks(frames, canonical, seeds, o.tracks);
 
@@ -257,7 +301,8 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
     for (int t = 0; t < num_times; ++t) {
       if (!tracks2d.is_valid(i, t) || !by_time[t]) continue;
       const Eigen::Vector2f& p = tracks2d.pixel(i, t);
-      const float z = DepthAt(*by_time[t], p);
+      if (depth_at[t]->empty()) continue;
+      const float z = DepthAt(*depth_at[t], by_time[t]->camera, p);
       if (!(z > 0)) continue;
       lifted[i * num_times + t] =
           Unproject(by_time[t]->camera, p.x(), p.y(), z);

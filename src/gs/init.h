@@ -25,9 +25,9 @@ struct InitOptions {
   // Voxel edge in pixels at the median depth (world size = median depth x
   // voxel_pixels / median focal length).
   double voxel_pixels = 2.0;
-  PointCloudFilterOptions filter;  // its voxel_size is set from the above
-  std::int64_t max_static = 400000;
-  std::int64_t max_dynamic = 100000;
+  PointCloudFilterOptions filter;    // its voxel_size is set from the above
+  std::int64_t max_static = 150000;  // CPU time grows with the count
+  std::int64_t max_dynamic = 50000;
   int num_bases = 10;    // K; 0 treats every pixel as static
   int track_stride = 3;  // seeds: every stride-th dynamic pixel
   TrackOptions tracks;

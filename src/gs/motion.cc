@@ -276,7 +276,8 @@ void PoseDynamicGaussiansBackward(
 
 template <typename T>
 double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
-                            MotionBasesT<T>* d_bases) {
+                            MotionBasesT<T>* d_bases,
+                            double translation_scale) {
   double loss = 0;
   // A mean over every (basis, time, component) second difference, so that
   // the weight does not depend on K or the number of frames.
@@ -286,7 +287,8 @@ double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
   if (terms == 0) return 0.0;
   weight /= static_cast<double>(terms);
   auto second_difference = [&](std::vector<T>& grads,
-                               const std::vector<T>& values, int width) {
+                               const std::vector<T>& values, int width,
+                               double scale) {
     for (int k = 0; k < bases.num_bases; ++k) {
       for (int t = 1; t + 1 < bases.num_times; ++t) {
         const std::size_t base = static_cast<std::size_t>(k) * bases.num_times;
@@ -294,9 +296,9 @@ double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
           const T a = values[(base + t - 1) * width + j];
           const T b = values[(base + t) * width + j];
           const T c = values[(base + t + 1) * width + j];
-          const double d = static_cast<double>(a) - 2.0 * b + c;
+          const double d = (static_cast<double>(a) - 2.0 * b + c) / scale;
           loss += weight * d * d;
-          const T g = static_cast<T>(2.0 * weight * d);
+          const T g = static_cast<T>(2.0 * weight * d / scale);
           grads[(base + t - 1) * width + j] += g;
           grads[(base + t) * width + j] -= 2 * g;
           grads[(base + t + 1) * width + j] += g;
@@ -304,8 +306,9 @@ double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
       }
     }
   };
-  second_difference(d_bases->translations, bases.translations, 3);
-  second_difference(d_bases->rotations, bases.rotations, 4);
+  second_difference(d_bases->translations, bases.translations, 3,
+                    translation_scale);
+  second_difference(d_bases->rotations, bases.rotations, 4, 1.0);
   return loss;
 }
 
@@ -319,7 +322,7 @@ double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
       int, std::size_t, const std::vector<T>&, const std::vector<T>&,          \
       std::vector<T>*, std::vector<T>*, std::vector<T>*, MotionBasesT<T>*);    \
   template double MotionSmoothnessLoss<T>(const MotionBasesT<T>&, double,      \
-                                          MotionBasesT<T>*);
+                                          MotionBasesT<T>*, double);
 PANO4D_INSTANTIATE(float)
 PANO4D_INSTANTIATE(double)
 #undef PANO4D_INSTANTIATE

@@ -72,12 +72,14 @@ void PoseDynamicGaussiansBackward(
     MotionBasesT<T>* d_bases);
 
 // Temporal smoothness of the bases: the mean over k, t and components of
-// the squared second difference of translations and rotations
-// (acceleration), times `weight`.
-// Adds its gradient into `d_bases` and returns the value.
+// the squared second difference of translations (divided by
+// `translation_scale`, e.g. the scene extent, so that the weight does not
+// depend on the scene's units) and rotations (acceleration), times
+// `weight`. Adds its gradient into `d_bases` and returns the value.
 template <typename T>
 double MotionSmoothnessLoss(const MotionBasesT<T>& bases, double weight,
-                            MotionBasesT<T>* d_bases);
+                            MotionBasesT<T>* d_bases,
+                            double translation_scale = 1.0);
 
 using MotionBases = MotionBasesT<float>;
 

@@ -357,6 +357,13 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
 }
 
 StepReport Trainer::Step() {
+  // 3DGS resets opacities after iteration k x opacity_reset_every; done at
+  // the start of the next step (the same sequence), so that what is
+  // validated or saved at that iteration is the model before the reset.
+  if (iteration_ > 0 && iteration_ < options_.densify_until &&
+      iteration_ % options_.opacity_reset_every == 0) {
+    ResetOpacities();
+  }
   StepReport report;
   RasterSettings settings;
   settings.background = options_.background;
@@ -485,7 +492,7 @@ StepReport Trainer::Step() {
   }
   if (scene_.has_motion() && options_.smoothness_weight > 0) {
     report.smoothness = MotionSmoothnessLoss(
-        scene_.bases, options_.smoothness_weight, &basis_grads_);
+        scene_.bases, options_.smoothness_weight, &basis_grads_, extent_);
     report.loss += report.smoothness;
   }
   times_.backward += Since(start) - (times_.motion - motion_before);
@@ -519,9 +526,6 @@ StepReport Trainer::Step() {
   if (it >= options_.densify_from && it < options_.densify_until &&
       it % options_.densify_every == 0) {
     Densify(reset_done_);
-  }
-  if (it < options_.densify_until && it % options_.opacity_reset_every == 0) {
-    ResetOpacities();
   }
   times_.densify += Since(start);
   return report;

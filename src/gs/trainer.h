@@ -73,7 +73,7 @@ struct TrainerOptions {
   // Opacities are reset to at most 0.01 every this many iterations while
   // densifying (3DGS), so that floaters can fade and be pruned.
   int opacity_reset_every = 3000;
-  std::int64_t max_gaussians = 1000000;
+  std::int64_t max_gaussians = 500000;
   Eigen::Vector3f background = Eigen::Vector3f::Zero();
 
   void Check() const;  // throws pano4d::Error naming the field

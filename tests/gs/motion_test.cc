@@ -167,10 +167,10 @@ TEST(MotionTest, SmoothnessGradientMatchesFiniteDifferences) {
   MotionBasesT<double> grad;
   grad.Reset(2, 5);
   std::fill(grad.rotations.begin(), grad.rotations.end(), 0.0);
-  MotionSmoothnessLoss(p.bases, 0.3, &grad);
+  MotionSmoothnessLoss(p.bases, 0.3, &grad, 2.5);
   const auto loss = [&] {
     MotionBasesT<double> scratch = grad;
-    return MotionSmoothnessLoss(p.bases, 0.3, &scratch);
+    return MotionSmoothnessLoss(p.bases, 0.3, &scratch, 2.5);
   };
   ExpectMatchesFiniteDifferences(&p.bases.translations, grad.translations, loss,
                                  "translation");
