@@ -16,9 +16,11 @@
 #include "src/core/camera.h"
 #include "src/core/camera_check.h"
 #include "src/core/error.h"
+#include "src/core/frames.h"
 #include "src/core/json.h"
 #include "src/core/timer.h"
 #include "src/core/version.h"
+#include "src/gs/trainer.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 
@@ -152,6 +154,7 @@ int RunBenchCamera(const BenchCameraOptions& options) {
 }
 
 struct BenchRenderOptions {
+  std::string workspace;  // a fitted scene instead of the random ones
   std::vector<int> gaussians = {10000, 100000, 500000};
   std::vector<std::string> sizes = {"480x360", "960x720"};
   int width = 0;  // --width/--height: one size instead of the list
@@ -160,7 +163,86 @@ struct BenchRenderOptions {
   bool json = false;
 };
 
+// The fitted scene of a workspace (`pano4d fit`'s checkpoint) rendered
+// from its training cameras at their times, one camera per run, cycling.
+int RunBenchRenderFitted(const BenchRenderOptions& options) {
+  const int threads = omp_get_max_threads();
+  const std::filesystem::path ws = options.workspace;
+  const GaussianScene scene =
+      ReadCheckpointScene(ws / "pano4d" / "checkpoints" / "fit.ckpt");
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
+  std::vector<RasterCamera> cameras;
+  std::vector<int> times;
+  for (const WorkspaceFrame& f : frames.train) {
+    cameras.push_back(RasterCamera::FromPosed(f.camera));
+    times.push_back(f.time);
+  }
+  GaussianModel model;
+  Rasterizer rasterizer;
+  RenderOutput out;
+  scene.ComposeAt(times[0], &model);
+  rasterizer.Forward(model, cameras[0], {}, &out);  // warm-up
+  std::vector<double> compose_ms, forward_ms, backward_ms;
+  std::uint64_t visible = 0, evaluations = 0;
+  ProjectedGradients grad2d;
+  GaussianGradients grad;
+  for (int r = 0; r < options.repeats; ++r) {
+    const std::size_t v = static_cast<std::size_t>(r) % cameras.size();
+    Timer compose;
+    scene.ComposeAt(times[v], &model);
+    compose_ms.push_back(1e3 * compose.WallSeconds());
+    Timer forward;
+    rasterizer.Forward(model, cameras[v], {}, &out);
+    forward_ms.push_back(1e3 * forward.WallSeconds());
+    visible += rasterizer.stats().visible;
+    evaluations += rasterizer.stats().pixel_evaluations;
+    const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), none;
+    Timer backward;
+    rasterizer.BlendBackward(cameras[v], {}, out, d_rgb, none, none, &grad2d);
+    rasterizer.ProjectBackward(model, cameras[v], grad2d, &grad);
+    backward_ms.push_back(1e3 * backward.WallSeconds());
+  }
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const double f = median(forward_ms), b = median(backward_ms),
+               c = median(compose_ms);
+  const int width = cameras[0].width, height = cameras[0].height;
+  const Json row = {
+      {"workspace", ws.string()},
+      {"gaussians", scene.size()},
+      {"static", scene.statics.size()},
+      {"dynamic", scene.dynamics.size()},
+      {"width", width},
+      {"height", height},
+      {"threads", threads},
+      {"compose_ms", c},
+      {"forward_ms", f},
+      {"forward_backward_ms", f + b},
+      {"fps", 1e3 / f},
+      {"visible", visible / options.repeats},
+      {"pixel_evaluations_per_s", evaluations / (1e-3 * f * options.repeats)}};
+  if (options.json) {
+    std::cout << row.dump() << "\n";
+    return kExitOk;
+  }
+  std::printf(
+      "pano4d %s bench render: the fitted scene of %s (%zu static, %zu "
+      "dynamic Gaussians) from its %zu training cameras at their times; "
+      "median of %d runs, %d threads\n",
+      kVersion, ws.c_str(), scene.statics.size(), scene.dynamics.size(),
+      cameras.size(), options.repeats, threads);
+  std::printf("%10s %10s %11s %12s %8s %18s %14s\n", "gaussians", "size",
+              "compose ms", "forward ms", "fps", "fwd+bwd ms", "visible");
+  std::printf("%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n",
+              scene.size(), width, height, c, f, 1e3 / f, f + b,
+              static_cast<unsigned long long>(visible / options.repeats));
+  return kExitOk;
+}
+
 int RunBenchRender(const BenchRenderOptions& options) {
+  if (!options.workspace.empty()) return RunBenchRenderFitted(options);
   const int threads = omp_get_max_threads();
   if (!options.json) {
     std::printf(
@@ -250,6 +332,10 @@ void AddBenchRender(CLI::App& bench, Action* action) {
   CLI::App* sub = bench.add_subcommand("render",
                                        "Rasterizer speed: forward ms, fps and "
                                        "Gaussian-pixel evaluations per second");
+  sub->add_option("--workspace", options->workspace,
+                  "Time the scene `pano4d fit` fitted in this workspace "
+                  "(its checkpoint) from its training cameras instead")
+      ->check(CLI::ExistingDirectory);
   sub->add_option("--gaussians", options->gaussians,
                   "Scene sizes (default 10k, 100k, 500k)")
       ->delimiter(',');

@@ -103,6 +103,19 @@ TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
   const std::string report = Slurp(log);
   EXPECT_NE(report.find("pano4d fit report"), std::string::npos);
   EXPECT_NE(report.find("validation"), std::string::npos);
+
+  // The rasterizer's benchmark on the fitted scene.
+  const fs::path bench = ws / "bench.json";
+  ASSERT_EQ(RunPano4d("bench render --json --repeats 2 --workspace '" +
+                          ws.string() + "'",
+                      bench),
+            0)
+      << Slurp(bench);
+  const nlohmann::json row = nlohmann::json::parse(Slurp(bench));
+  EXPECT_EQ(row.at("gaussians").get<int>(),
+            fit.at("static_gaussians").get<int>() +
+                fit.at("dynamic_gaussians").get<int>());
+  EXPECT_GT(row.at("forward_ms").get<double>(), 0.0);
 }
 
 TEST_F(FitBinaryTest, NoMotionHasNoMotionParameters) {
