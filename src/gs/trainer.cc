@@ -899,6 +899,16 @@ void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
   rng_state >> rng_;
   order_ = header.at("order").get<std::vector<int>>();
   order_pos_ = header.at("order_pos").get<std::size_t>();
+  for (int v : order_) {
+    if (v < 0 || v >= static_cast<int>(views_.size())) {
+      throw Error(source, "order", std::to_string(v),
+                  "names a view that does not exist (corrupt checkpoint)");
+    }
+  }
+  if (order_pos_ > order_.size()) {
+    throw Error(source, "order_pos", std::to_string(order_pos_),
+                "past the end of the epoch order (corrupt checkpoint)");
+  }
   reset_done_ = header.at("reset_done").get<bool>();
   iteration_ = header.at("iteration").get<std::int64_t>();
   const std::vector<std::int64_t> counters =
