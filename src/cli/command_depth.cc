@@ -163,6 +163,17 @@ void ComputeMissingMasks(const fs::path& dir,
   }
 }
 
+// A dataset frame's name, time, pinhole camera and image.
+WorkspaceFrame FrameOf(const DatasetFrame& d) {
+  WorkspaceFrame f;
+  f.name = d.id;
+  f.time = d.time_id;
+  f.camera = d.camera;
+  f.camera.camera = AsPinhole(d.camera.camera, d.rgb.string());
+  f.rgb = d.rgb;
+  return f;
+}
+
 WorkspaceFrames FramesFromDataset(const DepthCommandOptions& o) {
   const Dataset ds = LoadDataset(o.dataset, o.factor);
   WorkspaceFrames frames;
@@ -174,12 +185,7 @@ WorkspaceFrames FramesFromDataset(const DepthCommandOptions& o) {
   ProgressBar bar("depth", static_cast<std::int64_t>(ds.train.size()));
   std::int64_t missing_depth = 0;
   for (const DatasetFrame& d : ds.train) {
-    WorkspaceFrame f;
-    f.name = d.id;
-    f.time = d.time_id;
-    f.camera = d.camera;
-    f.camera.camera = AsPinhole(d.camera.camera, d.rgb.string());
-    f.rgb = d.rgb;
+    WorkspaceFrame f = FrameOf(d);
     if (!d.depth.empty()) {
       cv::Mat depth = ReadDepthMap(d.depth);
       if (depth.cols != f.camera.camera.width ||
@@ -214,12 +220,7 @@ WorkspaceFrames FramesFromDataset(const DepthCommandOptions& o) {
                 "--dataset` points)");
   }
   for (const DatasetFrame& d : ds.val) {
-    WorkspaceFrame f;
-    f.name = d.id;
-    f.time = d.time_id;
-    f.camera = d.camera;
-    f.camera.camera = AsPinhole(d.camera.camera, d.rgb.string());
-    f.rgb = d.rgb;
+    WorkspaceFrame f = FrameOf(d);
     f.covisible = d.covisible;
     frames.val.push_back(std::move(f));
   }
@@ -268,6 +269,24 @@ WorkspaceFrames FramesFromWorkspace(const DepthCommandOptions& o,
   return frames;
 }
 
+// The SfM points the frame's image observes: pixel and z-depth in its
+// camera (the model's image named <frame>.<ext>); none when it has none.
+std::vector<DepthSample> SfmSamples(const ColmapModel& model,
+                                    const WorkspaceFrame& f) {
+  std::vector<DepthSample> samples;
+  for (const ColmapImage& image : model.images) {
+    if (fs::path(image.name).stem().string() != f.name) continue;
+    for (const ColmapPoint2D& p : image.points2D) {
+      if (!p.HasPoint3D()) continue;
+      const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);
+      if (!point) continue;
+      const double z = (f.camera.cam_from_world * point->xyz).z();
+      if (z > 0) samples.push_back({p.xy, z});
+    }
+  }
+  return samples;
+}
+
 // External depth maps (`--depth-dir`, one per frame named <name>.npy, .png,
 // .tiff or .exr, any resolution) brought onto the SfM points' scale with a
 // robust scale and shift per frame.
@@ -299,20 +318,7 @@ void AlignExternalDepth(const DepthCommandOptions& o, const ColmapModel& model,
       cv::resize(depth, resized, cv::Size(w, h), 0, 0, cv::INTER_NEAREST);
       depth = resized;
     }
-    std::vector<DepthSample> samples;
-    const ColmapImage* image = nullptr;
-    for (const ColmapImage& im : model.images)
-      if (fs::path(im.name).stem().string() == f.name) image = &im;
-    if (image) {
-      const Rigid3d pose = image->CamFromWorld();
-      for (const ColmapPoint2D& p : image->points2D) {
-        if (!p.HasPoint3D()) continue;
-        const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);
-        if (!point) continue;
-        const double z = (pose * point->xyz).z();
-        if (z > 0) samples.push_back({p.xy, z});
-      }
-    }
+    const std::vector<DepthSample> samples = SfmSamples(model, f);
     try {
       const DepthAlignment a = AlignDepth(depth, samples);
       depth.forEach<float>([&](float& d, const int*) {
@@ -357,23 +363,9 @@ void StereoDepth(const DepthCommandOptions& o, const ColmapModel& model,
   std::vector<Info> info(frames->train.size());
   std::vector<double> all_depths;
   for (std::size_t i = 0; i < frames->train.size(); ++i) {
-    const WorkspaceFrame& f = frames->train[i];
-    const ColmapImage* image = nullptr;
-    for (const ColmapImage& im : model.images)
-      if (fs::path(im.name).stem().string() == f.name) image = &im;
+    info[i].samples = SfmSamples(model, frames->train[i]);
     std::vector<double> z;
-    if (image) {
-      for (const ColmapPoint2D& p : image->points2D) {
-        if (!p.HasPoint3D()) continue;
-        const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);
-        if (!point) continue;
-        const double depth = (f.camera.cam_from_world * point->xyz).z();
-        if (depth > 0) {
-          z.push_back(depth);
-          info[i].samples.push_back({p.xy, depth});
-        }
-      }
-    }
+    for (const DepthSample& sample : info[i].samples) z.push_back(sample.z);
     std::sort(z.begin(), z.end());
     if (z.size() >= kMinStereoPoints) {
       info[i].near = kStereoRangeMargin.first * z[z.size() * 2 / 100];

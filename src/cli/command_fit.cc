@@ -237,8 +237,7 @@ int RunFitCommand(FitCommandOptions o) {
   // Training-view PSNR over every training frame.
   double train_psnr = 0;
   {
-    const std::vector<TrainingView> train_views =
-        LoadTrainingViews(frames.train);
+    const std::vector<TrainingView>& train_views = trainer.views();
     RenderOutput out;
     for (const TrainingView& v : train_views) {
       trainer.Render(v.camera, v.time, &out);

@@ -3,27 +3,19 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
-#include <fstream>
-#include <map>
 #include <numeric>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
-#include "src/core/file.h"
 #include "src/core/image.h"
-#include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/npy.h"
 #include "src/gs/loss.h"
 
 namespace pano4d {
-namespace fs = std::filesystem;
 namespace {
 
-constexpr char kCheckpointMagic[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '1'};
 // Opacity that 3DGS's reset caps every Gaussian at.
 constexpr float kResetOpacity = 0.01f;
 // 3DGS's split: two samples, scales divided by 0.8 x 2.
@@ -235,19 +227,19 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
 }
 
 void Trainer::RegisterGroups() {
-  GaussianModel& s = scene_.statics;
-  static_mean_group_ = static_adam_.AddGroup("means", &s.means, 3, 0);
-  static_adam_.AddGroup("log_scales", &s.log_scales, 3, options_.lr_log_scale);
-  static_adam_.AddGroup("quats", &s.quats, 4, options_.lr_quat);
-  static_adam_.AddGroup("opacities", &s.opacities, 1, options_.lr_opacity);
-  static_adam_.AddGroup("sh", &s.sh, s.sh_coefficients() * 3, options_.lr_sh);
+  // The Gaussians' five groups; returns the means' index (its learning
+  // rate follows the schedule).
+  const auto add_model = [&](Adam* adam, GaussianModel* m) {
+    const int means = adam->AddGroup("means", &m->means, 3, 0);
+    adam->AddGroup("log_scales", &m->log_scales, 3, options_.lr_log_scale);
+    adam->AddGroup("quats", &m->quats, 4, options_.lr_quat);
+    adam->AddGroup("opacities", &m->opacities, 1, options_.lr_opacity);
+    adam->AddGroup("sh", &m->sh, m->sh_coefficients() * 3, options_.lr_sh);
+    return means;
+  };
+  static_mean_group_ = add_model(&static_adam_, &scene_.statics);
   if (!scene_.has_motion()) return;
-  GaussianModel& d = scene_.dynamics;
-  dynamic_mean_group_ = dynamic_adam_.AddGroup("means", &d.means, 3, 0);
-  dynamic_adam_.AddGroup("log_scales", &d.log_scales, 3, options_.lr_log_scale);
-  dynamic_adam_.AddGroup("quats", &d.quats, 4, options_.lr_quat);
-  dynamic_adam_.AddGroup("opacities", &d.opacities, 1, options_.lr_opacity);
-  dynamic_adam_.AddGroup("sh", &d.sh, d.sh_coefficients() * 3, options_.lr_sh);
+  dynamic_mean_group_ = add_model(&dynamic_adam_, &scene_.dynamics);
   dynamic_adam_.AddGroup("logits", &scene_.logits, scene_.bases.num_bases,
                          options_.lr_logit);
   MotionBases& b = scene_.bases;
@@ -272,6 +264,12 @@ void Trainer::UpdateLearningRates() {
   }
 }
 
+RasterSettings Trainer::Settings() const {
+  RasterSettings settings;
+  settings.background = options_.background;
+  return settings;
+}
+
 int Trainer::NextView() {
   if (order_pos_ >= order_.size()) {
     order_.resize(views_.size());
@@ -283,8 +281,7 @@ int Trainer::NextView() {
 }
 
 void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
-  RasterSettings settings;
-  settings.background = options_.background;
+  const RasterSettings settings = Settings();
   scene_.ComposeAt(time, &composed_);
   rasterizer_.Forward(composed_, camera, settings, out);
 }
@@ -292,8 +289,7 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
 void Trainer::Backprop(const RasterCamera& camera, int time,
                        const RenderOutput& out, const std::vector<float>& d_rgb,
                        const std::vector<float>& d_depth) {
-  RasterSettings settings;
-  settings.background = options_.background;
+  const RasterSettings settings = Settings();
   rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
                             &grads2d_);
   rasterizer_.ProjectBackward(composed_, camera, grads2d_, &grads_);
@@ -365,8 +361,7 @@ StepReport Trainer::Step() {
     ResetOpacities();
   }
   StepReport report;
-  RasterSettings settings;
-  settings.background = options_.background;
+  const RasterSettings settings = Settings();
   const TrainingView& view = views_[NextView()];
   const int w = view.camera.width, h = view.camera.height;
 
@@ -652,274 +647,6 @@ void Trainer::ResetOpacities() {
     }
   }
   reset_done_ = true;
-}
-
-// Checkpoint layout: 8-byte magic, uint64 header length, JSON header, then
-// the arrays the header lists, float32 little-endian, in order.
-void Trainer::SaveCheckpoint(const fs::path& path) const {
-  std::vector<std::pair<std::string, const std::vector<float>*>> arrays;
-  const auto add_model = [&](const std::string& prefix,
-                             const GaussianModel& m) {
-    arrays.push_back({prefix + "means", &m.means});
-    arrays.push_back({prefix + "log_scales", &m.log_scales});
-    arrays.push_back({prefix + "quats", &m.quats});
-    arrays.push_back({prefix + "opacities", &m.opacities});
-    arrays.push_back({prefix + "sh", &m.sh});
-  };
-  add_model("static.", scene_.statics);
-  add_model("dynamic.", scene_.dynamics);
-  arrays.push_back({"logits", &scene_.logits});
-  arrays.push_back({"bases.rotations", &scene_.bases.rotations});
-  arrays.push_back({"bases.translations", &scene_.bases.translations});
-  Trainer& self = const_cast<Trainer&>(*this);  // moment accessors
-  nlohmann::json adams = nlohmann::json::object();
-  for (auto [name, adam] : {std::pair{"static", &self.static_adam_},
-                            {"dynamic", &self.dynamic_adam_},
-                            {"basis", &self.basis_adam_}}) {
-    adams[name] = adam->step();
-    for (int g = 0; g < adam->groups(); ++g) {
-      arrays.push_back(
-          {std::string("adam.") + name + "." + adam->name(g) + ".m",
-           &adam->first_moment(g)});
-      arrays.push_back(
-          {std::string("adam.") + name + "." + adam->name(g) + ".v",
-           &adam->second_moment(g)});
-    }
-  }
-  std::vector<float> counts(grad_count_.begin(), grad_count_.end());
-  arrays.push_back({"densify.gradient", &grad_accum_});
-  arrays.push_back({"densify.count", &counts});
-  arrays.push_back({"densify.radius", &max_radius_});
-
-  std::ostringstream rng_state;
-  rng_state << rng_;
-  std::vector<std::string> names;
-  for (const TrainingView& v : views_) names.push_back(v.name);
-  nlohmann::json header = {{"format", "pano4d checkpoint 1"},
-                           {"iteration", iteration_},
-                           {"options", options_.ToJson()},
-                           {"views", names},
-                           {"rng", rng_state.str()},
-                           {"order", order_},
-                           {"order_pos", order_pos_},
-                           {"reset_done", reset_done_},
-                           {"adam_steps", adams},
-                           {"sh_degree", scene_.statics.sh_degree},
-                           {"num_times", scene_.num_times},
-                           {"canonical_time", scene_.canonical_time},
-                           {"num_bases", scene_.bases.num_bases},
-                           {"counters",
-                            {skipped_rows_total_, skipped_steps_total_,
-                             densified_total_, pruned_total_}}};
-  nlohmann::json list = nlohmann::json::array();
-  for (const auto& [name, values] : arrays)
-    list.push_back({{"name", name}, {"count", values->size()}});
-  header["arrays"] = list;
-  const std::string text = header.dump();
-  WriteAtomically(path, [&](const fs::path& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(kCheckpointMagic, sizeof(kCheckpointMagic));
-    const std::uint64_t length = text.size();
-    out.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    for (const auto& [name, values] : arrays) {
-      out.write(reinterpret_cast<const char*>(values->data()),
-                static_cast<std::streamsize>(values->size() * sizeof(float)));
-    }
-    out.flush();
-    if (!out) throw Error(tmp.string(), "", "", "write failed (disk full?)");
-  });
-}
-
-void Trainer::LoadCheckpoint(const fs::path& path) {
-  try {
-    LoadCheckpointUnchecked(path);
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), "header", "",
-                std::string("malformed checkpoint header: ") + e.what());
-  }
-}
-
-namespace {
-
-// A checkpoint file read into memory: its JSON header and where each array
-// lies.
-struct CheckpointFile {
-  std::string source;
-  std::vector<std::uint8_t> bytes;
-  Json header;
-  std::map<std::string, std::pair<std::size_t, std::size_t>> arrays;
-
-  explicit CheckpointFile(const fs::path& path) : source(path.string()) {
-    bytes = ReadFileBytes(path);
-    constexpr std::size_t kPrefix = sizeof(kCheckpointMagic) + 8;
-    if (bytes.size() < kPrefix ||
-        std::memcmp(bytes.data(), kCheckpointMagic, sizeof(kCheckpointMagic))) {
-      throw Error(source, "magic", "", "not a pano4d checkpoint");
-    }
-    std::uint64_t length = 0;
-    std::memcpy(&length, bytes.data() + sizeof(kCheckpointMagic), 8);
-    if (length > bytes.size() - kPrefix) {
-      throw Error(source, "header length", std::to_string(length),
-                  "larger than the file (truncated?)");
-    }
-    header = ParseJson(
-        std::string_view(reinterpret_cast<const char*>(bytes.data() + kPrefix),
-                         length),
-        source);
-    std::size_t offset = kPrefix + length;
-    for (const Json& a : header.at("arrays")) {
-      const std::size_t count = a.at("count").get<std::size_t>();
-      const std::string name = a.at("name").get<std::string>();
-      if (count > (bytes.size() - offset) / sizeof(float)) {
-        throw Error(source, "array " + name, std::to_string(count),
-                    "extends past the end (truncated?)");
-      }
-      arrays[name] = {offset, count};
-      offset += count * sizeof(float);
-    }
-    if (offset != bytes.size()) {
-      throw Error(source, "size", std::to_string(bytes.size()),
-                  "trailing bytes after the arrays (corrupt?)");
-    }
-  }
-
-  void Read(const std::string& name, std::vector<float>* dst) const {
-    const auto it = arrays.find(name);
-    if (it == arrays.end()) throw Error(source, "array", name, "missing");
-    dst->resize(it->second.second);
-    std::memcpy(dst->data(), bytes.data() + it->second.first,
-                it->second.second * sizeof(float));
-    for (float v : *dst) {
-      if (!std::isfinite(v)) {
-        throw Error(source, "array " + name, std::to_string(v),
-                    "holds a non-finite value");
-      }
-    }
-  }
-
-  GaussianScene Scene() const {
-    GaussianScene scene;
-    const int sh = header.at("sh_degree").get<int>();
-    scene.statics.sh_degree = scene.dynamics.sh_degree = sh;
-    scene.num_times = header.at("num_times").get<int>();
-    scene.canonical_time = header.at("canonical_time").get<int>();
-    const int k = header.at("num_bases").get<int>();
-    scene.bases.num_bases = k;
-    scene.bases.num_times = k > 0 ? scene.num_times : 0;
-    const auto read_model = [&](const std::string& prefix, GaussianModel* m) {
-      Read(prefix + "means", &m->means);
-      Read(prefix + "log_scales", &m->log_scales);
-      Read(prefix + "quats", &m->quats);
-      Read(prefix + "opacities", &m->opacities);
-      Read(prefix + "sh", &m->sh);
-    };
-    read_model("static.", &scene.statics);
-    read_model("dynamic.", &scene.dynamics);
-    Read("logits", &scene.logits);
-    Read("bases.rotations", &scene.bases.rotations);
-    Read("bases.translations", &scene.bases.translations);
-    scene.Check();
-    return scene;
-  }
-};
-
-}  // namespace
-
-GaussianScene ReadCheckpointScene(const fs::path& path) {
-  try {
-    return CheckpointFile(path).Scene();
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), "header", "",
-                std::string("malformed checkpoint header: ") + e.what());
-  }
-}
-
-void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
-  const CheckpointFile file(path);
-  const std::string& source = file.source;
-  const Json& header = file.header;
-  std::vector<std::string> names;
-  for (const TrainingView& v : views_) names.push_back(v.name);
-  if (header.at("views").get<std::vector<std::string>>() != names) {
-    throw Error(source, "views", "",
-                "the checkpoint belongs to other frames "
-                "(delete it or use another workspace)");
-  }
-  nlohmann::json saved_options = header.at("options");
-  nlohmann::json current = options_.ToJson();
-  if (saved_options != current) {
-    throw Error(source, "options", "",
-                "the checkpoint was written with other fit options (run with "
-                "the same options, or without --resume to start over)");
-  }
-  if (header.at("num_bases").get<int>() != scene_.bases.num_bases ||
-      header.at("sh_degree").get<int>() != scene_.statics.sh_degree ||
-      header.at("num_times").get<int>() != scene_.num_times) {
-    throw Error(source, "scene", "",
-                "motion bases, SH degree or times differ "
-                "from this workspace's scene");
-  }
-
-  // The scene's arrays (densification changed the row counts), then the
-  // optimisers' moments, which follow them.
-  {
-    GaussianScene loaded = file.Scene();
-    scene_.statics = std::move(loaded.statics);
-    scene_.dynamics = std::move(loaded.dynamics);
-    scene_.logits = std::move(loaded.logits);
-    scene_.bases = std::move(loaded.bases);
-    scene_.canonical_time = loaded.canonical_time;
-  }
-  const auto read = [&](const std::string& name, std::vector<float>* dst) {
-    file.Read(name, dst);
-  };
-  for (auto [name, adam] : {std::pair{"static", &static_adam_},
-                            {"dynamic", &dynamic_adam_},
-                            {"basis", &basis_adam_}}) {
-    for (int g = 0; g < adam->groups(); ++g) {
-      read(std::string("adam.") + name + "." + adam->name(g) + ".m",
-           &adam->first_moment(g));
-      read(std::string("adam.") + name + "." + adam->name(g) + ".v",
-           &adam->second_moment(g));
-    }
-    adam->set_step(header.at("adam_steps").at(name).get<std::int64_t>());
-    adam->RestoreRows();
-  }
-  std::vector<float> counts;
-  read("densify.gradient", &grad_accum_);
-  read("densify.count", &counts);
-  read("densify.radius", &max_radius_);
-  grad_count_.assign(counts.begin(), counts.end());
-  if (grad_accum_.size() != scene_.size() || counts.size() != scene_.size() ||
-      max_radius_.size() != scene_.size()) {
-    throw Error(source, "densify", "", "statistics do not match the model");
-  }
-  std::istringstream rng_state(header.at("rng").get<std::string>());
-  rng_state >> rng_;
-  order_ = header.at("order").get<std::vector<int>>();
-  order_pos_ = header.at("order_pos").get<std::size_t>();
-  for (int v : order_) {
-    if (v < 0 || v >= static_cast<int>(views_.size())) {
-      throw Error(source, "order", std::to_string(v),
-                  "names a view that does not exist (corrupt checkpoint)");
-    }
-  }
-  if (order_pos_ > order_.size()) {
-    throw Error(source, "order_pos", std::to_string(order_pos_),
-                "past the end of the epoch order (corrupt checkpoint)");
-  }
-  reset_done_ = header.at("reset_done").get<bool>();
-  iteration_ = header.at("iteration").get<std::int64_t>();
-  const std::vector<std::int64_t> counters =
-      header.at("counters").get<std::vector<std::int64_t>>();
-  if (counters.size() == 4) {
-    skipped_rows_total_ = counters[0];
-    skipped_steps_total_ = counters[1];
-    densified_total_ = counters[2];
-    pruned_total_ = counters[3];
-  }
-  UpdateLearningRates();
 }
 
 }  // namespace pano4d

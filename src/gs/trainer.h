@@ -140,13 +140,14 @@ class Trainer {
 
   // Everything a resumed run needs to continue as if never stopped
   // (parameters, optimiser moments, densification statistics, the random
-  // generator, the epoch order), written atomically.
+  // generator, the epoch order), written atomically (checkpoint.cc).
   void SaveCheckpoint(const std::filesystem::path& path) const;
   // Throws pano4d::Error naming the file when it is corrupt or belongs to
   // another scene (other views or options).
   void LoadCheckpoint(const std::filesystem::path& path);
 
   const GaussianScene& scene() const { return scene_; }
+  const std::vector<TrainingView>& views() const { return views_; }
   const TrainerOptions& options() const { return options_; }
   const PhaseTimes& times() const { return times_; }
   double extent() const { return extent_; }
@@ -157,6 +158,7 @@ class Trainer {
 
  private:
   void RegisterGroups();
+  RasterSettings Settings() const;
   void LoadCheckpointUnchecked(const std::filesystem::path& path);
   int NextView();
   void Densify(bool prune_large);
