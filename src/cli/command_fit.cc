@@ -17,6 +17,7 @@
 #include "evaluation/metrics.h"
 #include "evaluation/plot.h"
 #include "src/cli/app.h"
+#include "src/cli/expansion_outputs.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
@@ -29,6 +30,8 @@
 #include "src/core/timer.h"
 #include "src/gs/init.h"
 #include "src/gs/trainer.h"
+#include "src/pano/expansion.h"
+#include "src/pano/prior.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -46,7 +49,32 @@ struct FitCommandOptions {
   int log_every = 100;
   double time_budget = 0.0;
   std::uint64_t seed = 0;
+  bool no_expansion = false;
+  ExpansionOptions expansion;
+  std::string prior_cmd;  // empty: the CPU geometry prior
+  int panorama_width = 1024;
 };
+
+// Panoramas are written at this aspect (equirectangular: 2 x 1).
+constexpr int kPanoramaAspect = 2;
+
+// The prior the expansion fills holes with: the external command when given,
+// falling back to the CPU geometry prior when it fails.
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const fs::path& work_dir) {
+  if (command.empty()) return std::make_unique<GeometryPrior>();
+  return std::make_unique<CommandPrior>(command, work_dir,
+                                        std::make_unique<GeometryPrior>());
+}
+
+// The last expansion step that ran before iteration `before` (0: none).
+int LastStepBefore(const ExpansionOptions& o, std::int64_t before,
+                   int iterations) {
+  int last = 0;
+  for (std::int64_t it = o.every; it < before; it += o.every)
+    for (int e : StepsDueAt(o, it, iterations)) last = std::max(last, e);
+  return last;
+}
 
 struct ValidationView {
   std::string name;
@@ -178,6 +206,45 @@ int RunFitCommand(FitCommandOptions o) {
                       << " at iteration " << resumed_at;
   }
 
+  // The expansion (issue 8): on unless --no-expansion; a run too short for
+  // one expansion says so.
+  const fs::path expansion_dir = ws / "pano4d" / "expansion";
+  std::unique_ptr<Prior> prior;
+  std::unique_ptr<Expansion> expansion;
+  nlohmann::json expansion_steps = nlohmann::json::array();
+  o.expansion.seed = o.seed;
+  if (!o.no_expansion) {
+    o.expansion.Check();
+    if (o.trainer.iterations <= o.expansion.every) {
+      PANO4D_LOG(kInfo) << "fit: no expansion: " << o.trainer.iterations
+                        << " iterations leave no room for one every "
+                        << o.expansion.every << " (--expand-every)";
+    } else {
+      const fs::path options_path = expansion_dir / "options.json";
+      const nlohmann::json options_json = o.expansion.ToJson();
+      if (resuming && fs::exists(options_path) &&
+          ReadJson(options_path) != options_json) {
+        throw Error(options_path.string(), "options", "",
+                    "the checkpoint's run expanded with other options (run "
+                    "with the same expansion flags, or without --resume)");
+      }
+      EnsureDirectory(expansion_dir);
+      WriteJson(options_path, options_json);
+      prior = MakePrior(o.prior_cmd, expansion_dir / "prior");
+      expansion =
+          std::make_unique<Expansion>(o.expansion, expansion_dir, prior.get());
+      if (resuming) {
+        const fs::path steps_path = expansion_dir / "steps.json";
+        if (fs::exists(steps_path)) expansion_steps = ReadJson(steps_path);
+        expansion->Reload(trainer, LastStepBefore(o.expansion, resumed_at,
+                                                  o.trainer.iterations));
+      }
+      trainer.extra_view = [e = expansion.get()](std::int64_t it) {
+        return e->ViewFor(it);
+      };
+    }
+  }
+
   const fs::path csv = metrics_dir / "fit.csv";
   RunRecorder recorder(csv, "fit",
                        {"loss", "l1", "depth_loss", "train_psnr", "gaussians",
@@ -190,7 +257,18 @@ int RunFitCommand(FitCommandOptions o) {
   int window = 0;
   StepReport last;
   bool stopped_by_budget = false;
+  double expansion_seconds = 0;
   while (!trainer.Done()) {
+    if (expansion) {
+      for (int e :
+           StepsDueAt(o.expansion, trainer.iteration(), o.trainer.iterations)) {
+        const ExpansionStepReport r = expansion->RunStep(&trainer, e);
+        expansion_seconds += r.seconds;
+        PANO4D_LOG(kInfo) << r.Brief();
+        expansion_steps.push_back(r.ToJson());
+        WriteJson(expansion_dir / "steps.json", expansion_steps);
+      }
+    }
     last = trainer.Step();
     window_loss += last.loss;
     window_l1 += last.l1;
@@ -233,6 +311,12 @@ int RunFitCommand(FitCommandOptions o) {
     }
   }
   bar.Finish();
+  if (expansion && !expansion->cameras().empty()) {
+    WriteTrajectories(expansion_dir, expansion->cameras(), trainer.views());
+    WritePanoramas(ws / "pano4d" / "panorama", trainer.scene(),
+                   expansion->frame(), o.panorama_width,
+                   o.panorama_width / kPanoramaAspect);
+  }
 
   // Training-view PSNR over every training frame.
   double train_psnr = 0;
@@ -314,7 +398,13 @@ int RunFitCommand(FitCommandOptions o) {
         {"motion", t.motion},
         {"optimise", t.optimise},
         {"densify", t.densify},
-        {"validation", validation_seconds}}},
+        {"validation", validation_seconds},
+        {"expansion", expansion_seconds}}},
+      {"expansion", expansion
+                        ? nlohmann::json{{"options", o.expansion.ToJson()},
+                                         {"prior_cmd", o.prior_cmd},
+                                         {"steps", expansion_steps}}
+                        : nlohmann::json()},
       {"final_loss", last.loss},
       {"train_psnr", train_psnr},
       {"options", trainer.options().ToJson()},
@@ -345,6 +435,14 @@ int RunFitCommand(FitCommandOptions o) {
       "%.1f\n",
       "time", seconds, init_seconds, t.forward, t.loss, t.backward, t.motion,
       t.optimise, t.densify, t.compose, validation_seconds);
+  if (expansion) {
+    std::printf("  %-22s %zu steps, %.1f s, %zu refinement views\n",
+                "expansion", expansion_steps.size(), expansion_seconds,
+                expansion->refinement_views());
+  } else {
+    std::printf("  %-22s none (%s)\n", "expansion",
+                o.no_expansion ? "--no-expansion" : "run too short");
+  }
   std::printf("  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f)\n", "last loss",
               last.loss, last.l1, last.ssim, last.depth);
   std::printf("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
@@ -425,13 +523,61 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--smoothness-weight", o->trainer.smoothness_weight,
                   "Weight of the motion bases' acceleration penalty")
       ->capture_default_str();
+  sub->add_flag("--no-expansion", o->no_expansion,
+                "The same fit without panoramic expansion (the baseline of "
+                "every ablation)");
+  sub->add_option("--expand-every", o->expansion.every,
+                  "An expansion every N iterations; the steps are spread "
+                  "over them")
+      ->capture_default_str();
+  sub->add_option("--directions", o->expansion.geometry.directions,
+                  "Expansion directions M")
+      ->capture_default_str();
+  sub->add_option("--expansion-steps", o->expansion.geometry.steps,
+                  "Expansion steps E")
+      ->capture_default_str();
+  sub->add_option("--alpha", o->expansion.geometry.alpha_degrees,
+                  "Angle per expansion step, degrees")
+      ->capture_default_str();
+  sub->add_option("--refine-weight", o->expansion.refine_weight,
+                  "Weight of L_refine on the expanded views")
+      ->capture_default_str();
+  sub->add_option("--refine-every", o->expansion.refine_every,
+                  "L_refine on one expanded view every N iterations")
+      ->capture_default_str();
+  sub->add_option("--expansion-stride", o->expansion.time_stride,
+                  "Expand every N-th training frame in time")
+      ->capture_default_str();
+  sub->add_option("--prior-cmd", o->prior_cmd,
+                  "External video prior: a command with {in} and {out} "
+                  "(folders; see README). Without it, the CPU geometry prior. "
+                  "When the command fails, the CPU prior fills in and the log "
+                  "says why");
+  sub->add_flag("--planar-expansion", o->expansion.geometry.planar,
+                "Ablation: translate cameras in the image plane instead of "
+                "orbiting them on the panorama");
+  sub->add_flag("--one-step-expansion", o->expansion.one_step,
+                "Ablation: no progressive expansion, one step at the full "
+                "angle E x alpha");
+  sub->add_flag(
+      "--no-gaussian-refinement",
+      [o](std::int64_t) { o->expansion.gaussian_refinement = false; },
+      "Ablation: expanded views are made and written but not "
+      "distilled into the Gaussians");
+  sub->add_option("--panorama-width", o->panorama_width,
+                  "Width of the panoramas in WS/pano4d/panorama (height half)")
+      ->capture_default_str();
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "
       "WS/pano4d/metrics/fit.csv and fit.png (error against run time), and "
       "with validation frames WS/pano4d/renders/val/ (and z-depth in "
       "renders/val_depth/<frame>.npy) and "
       "WS/pano4d/metrics/metrics.json (keys psnr, ssim, mpsnr, mssim, upsnr, "
-      "ussim, ...).");
+      "ussim, ...). With expansion: WS/pano4d/expansion/ (per step and "
+      "direction the warped frames, masks M_e, refined frames; "
+      "trajectories.json; colmap/ with the training and expanded cameras) "
+      "and WS/pano4d/panorama/ (one equirectangular PNG per time step and "
+      "static.png).");
   sub->callback([action, o] { *action = [o] { return RunFitCommand(*o); }; });
 }
 

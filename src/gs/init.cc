@@ -8,10 +8,10 @@
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
-#include <opencv2/photo.hpp>
 
 #include "src/core/error.h"
 #include "src/core/log.h"
+#include "src/geometry/inpaint.h"
 
 namespace pano4d {
 namespace {
@@ -67,8 +67,9 @@ std::vector<float> DepthForMotion(const TrainingView& v) {
   cv::Mat depth(h, w, CV_32F, out.data());
   cv::Mat holes = depth <= 0;
   if (cv::countNonZero(holes) == static_cast<int>(depth.total())) return out;
-  cv::Mat filled;
-  cv::inpaint(depth, holes, filled, kInpaintRadius, cv::INPAINT_TELEA);
+  double max_depth = 0;
+  cv::minMaxLoc(depth, nullptr, &max_depth);
+  const cv::Mat filled = InpaintTelea(depth, holes, max_depth, kInpaintRadius);
   for (std::size_t p = 0; p < out.size(); ++p) {
     if (v.dynamic[p] && !(out[p] > 0))
       out[p] =
@@ -89,6 +90,8 @@ PointCloud Thin(const PointCloud& cloud, std::int64_t max) {
   }
   return out;
 }
+
+}  // namespace
 
 GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
                                  const InitOptions& o) {
@@ -115,8 +118,6 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
   }
   return m;
 }
-
-}  // namespace
 
 void InitOptions::Check() const {
   const auto positive = [](double v, const char* name) {

@@ -52,6 +52,13 @@ struct InitReport {
   std::string Brief() const;  // one line for logs
 };
 
+// Gaussians at the cloud's points: colour as SH degree 0, isotropic scale
+// the mean distance to the 3 nearest neighbours clamped to [0.25, 8] voxels,
+// identity rotation, opacity options.initial_opacity. Also used for the
+// Gaussians the expansion adds in unseen regions.
+GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
+                                 const InitOptions& options);
+
 // `views` as the trainer uses them (depth required on the views that
 // contribute; views without depth are skipped with a warning).
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,

@@ -632,6 +632,33 @@ void Trainer::Densify(bool prune_large) {
   grad_count_.assign(n, 0);
 }
 
+std::int64_t Trainer::AddStaticGaussians(const GaussianModel& extra) {
+  if (extra.sh_degree != scene_.statics.sh_degree) {
+    throw Error("trainer", "sh_degree", std::to_string(extra.sh_degree),
+                "added Gaussians must have the scene's SH degree " +
+                    std::to_string(scene_.statics.sh_degree));
+  }
+  const std::int64_t room = std::max<std::int64_t>(
+      0, options_.max_gaussians - static_cast<std::int64_t>(scene_.size()));
+  const std::int64_t count =
+      std::min<std::int64_t>(room, static_cast<std::int64_t>(extra.size()));
+  if (count == 0) return 0;
+  std::vector<std::uint32_t> rows(static_cast<std::size_t>(count));
+  std::iota(rows.begin(), rows.end(), 0u);
+  const std::size_t ns = scene_.statics.size();
+  AppendGaussianRows(extra, rows, &scene_.statics);
+  static_adam_.AppendRows(count);
+  // Densification statistics are in composed order: statics, then dynamics.
+  const auto insert = [&](auto* v) {
+    v->insert(v->begin() + static_cast<std::ptrdiff_t>(ns),
+              static_cast<std::size_t>(count), 0);
+  };
+  insert(&grad_accum_);
+  insert(&max_radius_);
+  insert(&grad_count_);
+  return count;
+}
+
 void Trainer::ResetOpacities() {
   const float cap = InverseSigmoid(kResetOpacity);
   for (float& o : scene_.statics.opacities) o = std::min(o, cap);

@@ -146,6 +146,12 @@ class Trainer {
   // another scene (other views or options).
   void LoadCheckpoint(const std::filesystem::path& path);
 
+  // Appends `extra` (the scene's SH degree) to the static Gaussians with
+  // fresh optimiser state (the expansion's Gaussians in unseen regions).
+  // Beyond max_gaussians the rows that do not fit are dropped. Returns the
+  // count added.
+  std::int64_t AddStaticGaussians(const GaussianModel& extra);
+
   const GaussianScene& scene() const { return scene_; }
   const std::vector<TrainingView>& views() const { return views_; }
   const TrainerOptions& options() const { return options_; }

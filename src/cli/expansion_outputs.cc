@@ -1,0 +1,94 @@
+#include "src/cli/expansion_outputs.h"
+
+#include <cstdio>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "colmap_ext/model.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/progress.h"
+#include "src/render/panorama.h"
+
+namespace pano4d::cli {
+namespace {
+
+std::string Padded(int value, int width) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%0*d", width, value);
+  return buffer;
+}
+
+void AddImage(const RasterCamera& c, const std::string& name,
+              ColmapModel* model) {
+  const auto id = static_cast<std::uint32_t>(model->images.size() + 1);
+  ColmapCamera camera;
+  camera.camera_id = id;
+  camera.model_id = static_cast<int>(CameraModelId::kPinhole);
+  camera.width = static_cast<std::uint64_t>(c.width);
+  camera.height = static_cast<std::uint64_t>(c.height);
+  camera.params = {c.fx, c.fy, c.cx, c.cy};
+  model->cameras.push_back(camera);
+  ColmapImage image;
+  image.image_id = id;
+  image.camera_id = id;
+  image.name = name;
+  const Eigen::Quaterniond q =
+      Eigen::Quaterniond(c.rotation.cast<double>()).normalized();
+  image.qvec = Eigen::Vector4d(q.w(), q.x(), q.y(), q.z());
+  image.tvec = c.translation.cast<double>();
+  model->images.push_back(image);
+}
+
+}  // namespace
+
+void WriteTrajectories(const std::filesystem::path& dir,
+                       const std::vector<ExpandedView>& cameras,
+                       const std::vector<TrainingView>& sources) {
+  Json views = Json::array();
+  ColmapModel model;
+  for (const TrainingView& v : sources)
+    AddImage(v.camera, "source/" + v.name + ".png", &model);
+  for (const ExpandedView& v : cameras) {
+    views.push_back(ToJson(v));
+    AddImage(v.camera,
+             "step_" + Padded(v.e, 2) + "/dir_" + std::to_string(v.m) + "/" +
+                 Padded(v.t, 5) + ".png",
+             &model);
+  }
+  WriteJson(dir / "trajectories.json",
+            {{"note",
+              "expanded cameras (DESIGN.md eqs. dir1, dir2): m direction, e "
+              "step, t time; qvec (w, x, y, z) and tvec of cam_from_world as "
+              "COLMAP"},
+             {"views", views}});
+  model.BuildIndex();
+  WriteModel(model, dir / "colmap", ColmapFormat::kText);
+}
+
+void WritePanoramas(const std::filesystem::path& dir,
+                    const GaussianScene& scene, const PanoramaFrame& frame,
+                    int width, int height) {
+  const EquirectProjection projection = frame.Projection(width, height);
+  const auto write = [&](const GaussianModel& model,
+                         const std::filesystem::path& path) {
+    const PanoramaImage pano = SplatGaussians(projection, model);
+    cv::Mat rgb(pano.height, pano.width, CV_32FC3);
+    std::copy(pano.rgb.begin(), pano.rgb.end(), rgb.ptr<float>());
+    cv::min(cv::max(rgb, 0.0), 1.0, rgb);
+    WriteImage(path, Image::FromRgb32f(rgb));
+  };
+  write(scene.statics, dir / "static.png");
+  ProgressBar bar("panoramas", scene.num_times);
+  GaussianModel composed;
+  for (int t = 0; t < scene.num_times; ++t) {
+    scene.ComposeAt(t, &composed);
+    write(composed, dir / (Padded(t, 5) + ".png"));
+    bar.Add();
+  }
+  bar.Finish();
+}
+
+}  // namespace pano4d::cli

@@ -1,0 +1,30 @@
+#pragma once
+// What the expansion leaves in the workspace for people and viewers:
+// trajectories as JSON and as a COLMAP model, and equirectangular panoramas.
+
+#include <filesystem>
+#include <vector>
+
+#include "src/gs/scene.h"
+#include "src/gs/trainer.h"
+#include "src/pano/frame.h"
+#include "src/pano/trajectory.h"
+
+namespace pano4d::cli {
+
+// dir/trajectories.json (every expanded camera, with m, e, t) and
+// dir/colmap/{cameras,images,points3D}.txt: the training cameras (named
+// source/<frame>) beside the expanded ones (step_<e>/dir_<m>/<t>.png), so
+// that COLMAP's GUI (File > Import model) shows them together.
+void WriteTrajectories(const std::filesystem::path& dir,
+                       const std::vector<ExpandedView>& cameras,
+                       const std::vector<TrainingView>& sources);
+
+// dir/<t>.png for every time (all Gaussians posed at t) and dir/static.png
+// (static Gaussians only: the content aggregated over time), equirectangular
+// in the panorama frame, width x height.
+void WritePanoramas(const std::filesystem::path& dir,
+                    const GaussianScene& scene, const PanoramaFrame& frame,
+                    int width, int height);
+
+}  // namespace pano4d::cli

@@ -1,0 +1,449 @@
+#include "src/pano/expansion.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/npy.h"
+#include "src/geometry/inpaint.h"
+#include "src/geometry/point_cloud.h"
+#include "src/gs/init.h"
+#include "src/pano/warp.h"
+
+namespace pano4d {
+namespace {
+
+constexpr double kDegrees = M_PI / 180.0;
+// Rendered depth is trusted where the Gaussians are this opaque: at
+// semi-transparent edges the expected depth lies between surfaces.
+constexpr float kWarpAlpha = 0.5f;
+// A pixel of M_e that the current Gaussians already cover this much gets no
+// new Gaussian (a later step sees what an earlier one added).
+constexpr float kCoveredAlpha = 0.5f;
+// Pixels around a hole that depth inpainting draws from.
+constexpr double kDepthInpaintRadius = 5.0;
+
+std::string Name(const char* prefix, int value, int width) {
+  std::ostringstream s;
+  s << prefix;
+  s.width(width);
+  s.fill('0');
+  s << value;
+  return s.str();
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Colour quantised to 8 bits, as the refinement target is stored (so that a
+// resumed run, which reads the PNGs, sees what the first run saw).
+cv::Mat Quantised(const cv::Mat& rgb) {
+  cv::Mat bytes, out;
+  rgb.convertTo(bytes, CV_8UC3, 255.0);
+  bytes.convertTo(out, CV_32FC3, 1.0 / 255.0);
+  return out;
+}
+
+// Depth of a refined frame: the warp's where it had one, the prior's where
+// it filled and knew it, inpainted from around the hole elsewhere.
+cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
+                     const cv::Mat& prior_depth) {
+  cv::Mat depth = warped_depth.clone();
+  if (!prior_depth.empty()) prior_depth.copyTo(depth, filled_mask);
+  cv::Mat missing = depth <= 0;
+  const int count = cv::countNonZero(missing);
+  if (count > 0 && count < static_cast<int>(depth.total())) {
+    double max_depth = 0;
+    cv::minMaxLoc(depth, nullptr, &max_depth);
+    InpaintTelea(depth, missing, max_depth, kDepthInpaintRadius)
+        .copyTo(depth, missing);
+  }
+  return depth;
+}
+
+std::uint64_t SplitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+void ExpansionOptions::Check() const {
+  geometry.Check();
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0)) {
+      throw Error("expansion options", name, std::to_string(v),
+                  "must be positive");
+    }
+  };
+  positive(every, "every");
+  positive(refine_every, "refine_every");
+  positive(time_stride, "time_stride");
+  positive(new_gaussian_stride, "new_gaussian_stride");
+  positive(voxel_pixels, "voxel_pixels");
+  if (!(refine_weight >= 0)) {
+    throw Error("expansion options", "refine_weight",
+                std::to_string(refine_weight), "must be zero or positive");
+  }
+}
+
+nlohmann::json ExpansionOptions::ToJson() const {
+  return {{"directions", geometry.directions},
+          {"steps", geometry.steps},
+          {"alpha_degrees", geometry.alpha_degrees},
+          {"planar", geometry.planar},
+          {"every", every},
+          {"refine_weight", refine_weight},
+          {"refine_every", refine_every},
+          {"time_stride", time_stride},
+          {"one_step", one_step},
+          {"gaussian_refinement", gaussian_refinement},
+          {"new_gaussian_stride", new_gaussian_stride},
+          {"voxel_pixels", voxel_pixels},
+          {"seed", seed}};
+}
+
+std::vector<int> StepsDueAt(const ExpansionOptions& o, std::int64_t iteration,
+                            int iterations) {
+  if (iteration <= 0 || iteration % o.every != 0 || iteration >= iterations)
+    return {};
+  const std::int64_t k = iteration / o.every;
+  const std::int64_t expansions = (iterations - 1) / o.every;
+  const int steps = o.geometry.steps;
+  if (o.one_step) return k == 1 ? std::vector<int>{steps} : std::vector<int>{};
+  const auto up_to = [&](std::int64_t j) {
+    return static_cast<int>((steps * j + expansions - 1) / expansions);
+  };
+  std::vector<int> due;
+  for (int e = up_to(k - 1) + 1; e <= up_to(k); ++e) due.push_back(e);
+  return due;
+}
+
+std::string ExpansionStepReport::Brief() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << "expansion step " << step << " (" << angle_degrees << " deg): " << views
+    << " views, holes " << 100 * hole_fraction << "% (chained "
+    << 100 * prefilled_fraction << "% of them), " << new_gaussians
+    << " new Gaussians, prior " << prior;
+  if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
+  s << ", " << seconds << " s";
+  return s.str();
+}
+
+nlohmann::json ExpansionStepReport::ToJson() const {
+  return {{"step", step},
+          {"angle_degrees", angle_degrees},
+          {"views", views},
+          {"hole_fraction", hole_fraction},
+          {"prefilled_fraction", prefilled_fraction},
+          {"new_gaussians", new_gaussians},
+          {"prior", prior},
+          {"fallbacks", fallbacks},
+          {"seconds", seconds}};
+}
+
+Expansion::Expansion(ExpansionOptions options, std::filesystem::path out_dir,
+                     Prior* prior)
+    : options_(std::move(options)),
+      out_dir_(std::move(out_dir)),
+      prior_(prior) {
+  options_.Check();
+  if (!prior_) throw Error("expansion", "prior", "null", "a prior is needed");
+}
+
+std::filesystem::path Expansion::StepDir(int e) const {
+  return out_dir_ / Name("step_", e, 2);
+}
+
+void Expansion::Prepare(const Trainer& trainer) {
+  if (prepared_) return;
+  const std::vector<TrainingView>& views = trainer.views();
+  if (views.empty())
+    throw Error("expansion", "views", "0", "no training views");
+  std::vector<std::size_t> order(views.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) {
+                     return views[a].time < views[b].time;
+                   });
+  reference_ = views[order[0]].camera;
+  sources_.clear();
+  for (std::size_t i = 0; i < order.size();
+       i += static_cast<std::size_t>(options_.time_stride)) {
+    const TrainingView& v = views[order[i]];
+    sources_.push_back({order[i], v.camera, v.time});
+  }
+  const std::filesystem::path frame_path = out_dir_ / "frame.json";
+  if (std::filesystem::exists(frame_path) && last_step_ > 0) {
+    const Json j = ReadJson(frame_path);
+    const auto c = GetJson<std::vector<double>>(j, "center", frame_path);
+    const auto r = GetJson<std::vector<double>>(j, "r_align", frame_path);
+    if (c.size() != 3 || r.size() != 9) {
+      throw Error(frame_path.string(), "center/r_align", "",
+                  "expected 3 and 9 numbers");
+    }
+    frame_.center = Eigen::Vector3d(c[0], c[1], c[2]);
+    for (int i = 0; i < 9; ++i) frame_.r_align(i / 3, i % 3) = r[i];
+  } else {
+    const GaussianScene& scene = trainer.scene();
+    std::vector<Eigen::Vector3f> points;
+    for (const GaussianModel* m : {&scene.statics, &scene.dynamics})
+      for (std::size_t i = 0; i < m->size(); ++i)
+        points.emplace_back(m->means[i * 3], m->means[i * 3 + 1],
+                            m->means[i * 3 + 2]);
+    std::vector<RasterCamera> cameras;
+    for (std::size_t i : order) cameras.push_back(views[i].camera);
+    frame_ = MakePanoramaFrame(points, cameras);
+    std::vector<double> r(9);
+    for (int i = 0; i < 9; ++i) r[i] = frame_.r_align(i / 3, i % 3);
+    EnsureDirectory(out_dir_);
+    WriteJson(
+        frame_path,
+        {{"center", {frame_.center.x(), frame_.center.y(), frame_.center.z()}},
+         {"r_align", r},
+         {"note",
+          "panorama frame (DESIGN.md): p~ = R_align^T (p - "
+          "center); r_align row-major"}});
+  }
+  prepared_ = true;
+}
+
+ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
+  const auto start = std::chrono::steady_clock::now();
+  Prepare(*trainer);
+  const int directions = options_.geometry.directions;
+  const std::size_t ns = sources_.size();
+  ExpansionStepReport report;
+  report.step = e;
+  report.angle_degrees = e * options_.geometry.alpha_degrees;
+  report.prior = prior_->name();
+
+  std::vector<RasterCamera> source_cameras;
+  std::vector<int> times;
+  for (const Source& s : sources_) {
+    source_cameras.push_back(s.camera);
+    times.push_back(s.time);
+  }
+  const std::vector<ExpandedView> cams = ExpansionViews(
+      options_.geometry, reference_, frame_.center, source_cameras, times, e);
+
+  // Depth from the current Gaussians at the source cameras, fixed for the
+  // whole step.
+  const std::vector<TrainingView>& views = trainer->views();
+  std::vector<cv::Mat> rgb(ns), depth(ns);
+  RenderOutput out;
+  for (std::size_t s = 0; s < ns; ++s) {
+    const TrainingView& v = views[sources_[s].view];
+    rgb[s] = cv::Mat(v.camera.height, v.camera.width, CV_32FC3,
+                     const_cast<float*>(v.rgb.data()));
+    trainer->Render(v.camera, v.time, &out);
+    depth[s] =
+        cv::Mat(v.camera.height, v.camera.width, CV_32FC1, cv::Scalar(0));
+    for (std::size_t p = 0; p < out.depth.size(); ++p)
+      if (out.alpha[p] >= kWarpAlpha)
+        depth[s].at<float>(static_cast<int>(p)) = out.depth[p];
+  }
+
+  const bool chain = last_step_ == e - 1 && !previous_.empty();
+  const std::filesystem::path dir = StepDir(e);
+  std::filesystem::remove_all(dir);
+  std::vector<Refined> current(directions * ns);
+  PointCloud points;
+  std::vector<double> point_depths, focals;
+  double hole_sum = 0, holes = 0, prefilled = 0;
+  Json cameras_json = Json::array();
+  for (int m = 0; m < directions; ++m) {
+    PriorClip clip;
+    clip.name = Name("step", e, 2) + Name("_dir", m, 1);
+    std::vector<cv::Mat> original_masks(ns);
+    for (std::size_t s = 0; s < ns; ++s) {
+      const ExpandedView& v = cams[m * ns + s];
+      WarpResult w =
+          ForwardWarp(rgb[s], depth[s], sources_[s].camera, v.camera);
+      original_masks[s] = w.mask.clone();
+      const int hole = cv::countNonZero(w.mask);
+      hole_sum += static_cast<double>(hole) / w.mask.total();
+      holes += hole;
+      if (chain) {
+        const Refined& p = previous_[m * ns + s];
+        prefilled +=
+            FillHoles(ForwardWarp(p.rgb, p.depth, p.camera, v.camera), &w);
+      }
+      clip.frames.push_back(w.rgb);
+      clip.masks.push_back(w.mask);
+      clip.depth.push_back(w.depth);
+      clip.cameras.push_back(v.camera);
+      clip.times.push_back(v.t);
+      clip.references.push_back(rgb[s]);
+      clip.reference_cameras.push_back(sources_[s].camera);
+      cameras_json.push_back(ToJson(v));
+    }
+    const PriorResult filled = prior_->Fill(clip);
+    if (filled.prior != prior_->name()) {
+      ++report.fallbacks;
+      report.prior = prior_->name() + " -> " + filled.prior;
+    }
+    const std::filesystem::path dm = dir / Name("dir_", m, 1);
+    for (std::size_t s = 0; s < ns; ++s) {
+      const ExpandedView& v = cams[m * ns + s];
+      const cv::Mat refined =
+          Quantised(Composite(clip.frames[s], filled.frames[s], clip.masks[s]));
+      const cv::Mat refined_depth =
+          RefinedDepth(clip.depth[s], clip.masks[s],
+                       filled.depth.empty() ? cv::Mat() : filled.depth[s]);
+      current[m * ns + s] = {v.camera, refined, refined_depth};
+      const std::string id = Name("", v.t, 5);
+      WriteImage(dm / "warped" / (id + ".png"),
+                 Image::FromRgb32f(clip.frames[s].clone()));
+      WriteMask(dm / "mask" / (id + ".png"), original_masks[s]);
+      WriteImage(dm / "refined" / (id + ".png"),
+                 Image::FromRgb32f(refined.clone()));
+      WriteNpy(
+          dm / "depth" / (id + ".npy"),
+          NpyArray::FromFloats({refined_depth.rows, refined_depth.cols},
+                               std::vector<float>(refined_depth.begin<float>(),
+                                                  refined_depth.end<float>())));
+      if (!options_.gaussian_refinement) continue;
+      trainer->Render(v.camera, v.t, &out);
+      const RasterCamera& c = v.camera;
+      for (int y = 0; y < c.height; y += options_.new_gaussian_stride) {
+        for (int x = 0; x < c.width; x += options_.new_gaussian_stride) {
+          const std::size_t p = static_cast<std::size_t>(y) * c.width + x;
+          const float z = refined_depth.at<float>(y, x);
+          if (!original_masks[s].at<std::uint8_t>(y, x) ||
+              out.alpha[p] >= kCoveredAlpha || !(z > 0))
+            continue;
+          const Eigen::Vector3f xc((x + 0.5f - c.cx) / c.fx * z,
+                                   (y + 0.5f - c.cy) / c.fy * z, z);
+          points.points.push_back(c.rotation.transpose() *
+                                  (xc - c.translation));
+          const cv::Vec3f col = refined.at<cv::Vec3f>(y, x);
+          points.colors.emplace_back(col[0], col[1], col[2]);
+          point_depths.push_back(z);
+        }
+      }
+      focals.push_back(0.5 * (c.fx + c.fy));
+      StoredView stored{c, v.t, cv::Mat(), original_masks[s] / 255};
+      refined.convertTo(stored.target, CV_8UC3, 255.0);
+      views_.push_back(std::move(stored));
+    }
+  }
+  WriteJson(dir / "cameras.json", {{"step", e},
+                                   {"angle_degrees", report.angle_degrees},
+                                   {"views", cameras_json}});
+  // Chaining needs only the last step's depth.
+  if (last_step_ > 0 && last_step_ != e) {
+    for (int m = 0; m < directions; ++m)
+      std::filesystem::remove_all(StepDir(last_step_) / Name("dir_", m, 1) /
+                                  "depth");
+  }
+  previous_ = std::move(current);
+  last_step_ = e;
+  report.views = static_cast<int>(cams.size());
+  report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
+  report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
+
+  if (options_.gaussian_refinement && points.size() > 0) {
+    const double voxel =
+        Median(point_depths) * options_.voxel_pixels / Median(focals);
+    PointCloudFilterOptions filter;
+    filter.voxel_size = voxel;
+    InitOptions init;
+    init.sh_degree = trainer->scene().statics.sh_degree;
+    const PointCloud kept = FilterPointCloud(points, filter);
+    report.new_gaussians =
+        trainer->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
+  }
+  all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
+  report.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  return report;
+}
+
+const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
+  if (views_.empty() || !options_.gaussian_refinement ||
+      iteration % options_.refine_every != 0)
+    return nullptr;
+  const std::size_t i =
+      SplitMix64(options_.seed ^ static_cast<std::uint64_t>(iteration)) %
+      views_.size();
+  const StoredView& v = views_[i];
+  buffer_.camera = v.camera;
+  buffer_.time = v.time;
+  buffer_.weight = options_.refine_weight;
+  buffer_.target.resize(v.target.total() * 3);
+  const std::uint8_t* t = v.target.ptr<std::uint8_t>();
+  for (std::size_t k = 0; k < buffer_.target.size(); ++k)
+    buffer_.target[k] = t[k] / 255.0f;
+  buffer_.mask.assign(v.mask.ptr<std::uint8_t>(),
+                      v.mask.ptr<std::uint8_t>() + v.mask.total());
+  return &buffer_;
+}
+
+void Expansion::Reload(const Trainer& trainer, int last_step) {
+  if (last_step <= 0) return;
+  last_step_ = last_step;
+  Prepare(trainer);
+  const int directions = options_.geometry.directions;
+  previous_.assign(directions * sources_.size(), Refined());
+  for (int e = options_.one_step ? last_step : 1; e <= last_step; ++e) {
+    const std::filesystem::path cameras_path = StepDir(e) / "cameras.json";
+    if (!std::filesystem::exists(cameras_path)) {
+      throw Error(cameras_path.string(), "file", "",
+                  "missing: the expansion products of step " +
+                      std::to_string(e) +
+                      " are needed to resume; run again without --resume");
+    }
+    const std::vector<ExpandedView> cams = ExpansionViews(
+        options_.geometry, reference_, frame_.center,
+        [&] {
+          std::vector<RasterCamera> c;
+          for (const Source& s : sources_) c.push_back(s.camera);
+          return c;
+        }(),
+        [&] {
+          std::vector<int> t;
+          for (const Source& s : sources_) t.push_back(s.time);
+          return t;
+        }(),
+        e);
+    for (std::size_t k = 0; k < cams.size(); ++k) {
+      const ExpandedView& v = cams[k];
+      const std::filesystem::path dm = StepDir(e) / Name("dir_", v.m, 1);
+      const std::string id = Name("", v.t, 5);
+      const cv::Mat refined = ReadImage(dm / "refined" / (id + ".png")).mat();
+      if (options_.gaussian_refinement) {
+        StoredView stored{v.camera, v.t, cv::Mat(),
+                          ReadMask(dm / "mask" / (id + ".png")) / 255};
+        refined.convertTo(stored.target, CV_8UC3, 255.0);
+        views_.push_back(std::move(stored));
+      }
+      if (e == last_step) {
+        const std::vector<float> d =
+            ReadNpy(dm / "depth" / (id + ".npy")).ToFloats();
+        cv::Mat depth(v.camera.height, v.camera.width, CV_32FC1);
+        std::copy(d.begin(), d.end(), depth.begin<float>());
+        previous_[k] = {v.camera, refined.clone(), depth};
+      }
+    }
+    all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
+  }
+}
+
+}  // namespace pano4d

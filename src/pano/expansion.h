@@ -1,0 +1,127 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+#include <opencv2/core.hpp>
+
+#include "src/gs/trainer.h"
+#include "src/pano/frame.h"
+#include "src/pano/prior.h"
+#include "src/pano/trajectory.h"
+
+namespace pano4d {
+
+// The progressive expansion inside fit (DESIGN.md, "Warping" to
+// "Refinement"; paper defaults).
+struct ExpansionOptions {
+  ExpansionGeometry geometry;
+  // An expansion every `every` iterations (those strictly before the end);
+  // the E steps are spread over them: expansion k of K runs the steps up
+  // to ceil(E k / K).
+  int every = 2000;
+  double refine_weight = 0.1;  // L_refine
+  // L_refine on one expanded view every this many iterations.
+  int refine_every = 1;
+  // Source frames: every time_stride-th training frame in time order (the
+  // views kept in memory: directions x steps x frames / stride).
+  int time_stride = 4;
+  // Ablation: no progressive expansion, one step at the full angle E alpha.
+  bool one_step = false;
+  // Ablation: expanded views are produced and written, but not distilled
+  // into the Gaussians (no new Gaussians, no L_refine).
+  bool gaussian_refinement = true;
+  // New Gaussians: every stride-th pixel of M_e not yet covered (rendered
+  // alpha below kCoveredAlpha), thinned by a voxel grid of voxel_pixels at
+  // the median depth.
+  int new_gaussian_stride = 2;
+  double voxel_pixels = 2.0;
+  std::uint64_t seed = 0;
+
+  void Check() const;  // throws pano4d::Error naming the field
+  nlohmann::json ToJson() const;
+};
+
+// Which steps run when: for a run of `iterations`, the steps due at the
+// expansion after `iteration` iterations (empty when none is due).
+std::vector<int> StepsDueAt(const ExpansionOptions& options,
+                            std::int64_t iteration, int iterations);
+
+struct ExpansionStepReport {
+  int step = 0;
+  double angle_degrees = 0.0;
+  int views = 0;
+  double hole_fraction = 0.0;       // mean over views of |M_e| / pixels
+  double prefilled_fraction = 0.0;  // of M_e, filled by chaining step e-1
+  std::int64_t new_gaussians = 0;
+  std::string prior;  // the prior that filled (or "command -> geometry")
+  int fallbacks = 0;
+  double seconds = 0.0;
+  std::string Brief() const;
+  nlohmann::json ToJson() const;
+};
+
+// Runs expansion steps on a Trainer's current Gaussians and serves the
+// refinement views to its extra_view hook. Products go under `out_dir`
+// (WS/pano4d/expansion): frame.json, step_<e>/dir_<m>/{warped,mask,refined}
+// PNGs and cameras.json per step.
+class Expansion {
+ public:
+  Expansion(ExpansionOptions options, std::filesystem::path out_dir,
+            Prior* prior);
+
+  // Step e (1..E; angle e alpha): depth rendered at the source cameras and
+  // held fixed; the original frames warped into every direction's cameras;
+  // holes pre-filled from step e-1's refined frames when it ran; the prior
+  // fills the rest; Gaussians added in M_e; refinement views queued.
+  ExpansionStepReport RunStep(Trainer* trainer, int e);
+
+  // The Trainer::extra_view hook: a refinement view for this iteration,
+  // chosen by (seed, iteration) alone so that a resumed run picks the same.
+  const ExtraView* ViewFor(std::int64_t iteration);
+
+  // After --resume: the refinement views of steps 1..last_step as written.
+  void Reload(const Trainer& trainer, int last_step);
+
+  const std::vector<ExpandedView>& cameras() const { return all_cameras_; }
+  const PanoramaFrame& frame() const { return frame_; }
+  std::size_t refinement_views() const { return views_.size(); }
+
+ private:
+  struct Source {
+    std::size_t view;  // index into the trainer's views
+    RasterCamera camera;
+    int time;
+  };
+  struct StoredView {  // compact: 8-bit target
+    RasterCamera camera;
+    int time;
+    cv::Mat target;  // CV_8UC3 RGB
+    cv::Mat mask;    // CV_8UC1, 1 = M_e
+  };
+  struct Refined {  // step e's result per (direction, source), for chaining
+    RasterCamera camera;
+    cv::Mat rgb;    // CV_32FC3
+    cv::Mat depth;  // CV_32FC1
+  };
+  void Prepare(const Trainer& trainer);
+  std::filesystem::path StepDir(int e) const;
+
+  ExpansionOptions options_;
+  std::filesystem::path out_dir_;
+  Prior* prior_;
+  bool prepared_ = false;
+  PanoramaFrame frame_;
+  RasterCamera reference_;
+  std::vector<Source> sources_;
+  std::vector<StoredView> views_;
+  std::vector<ExpandedView> all_cameras_;
+  int last_step_ = 0;
+  std::vector<Refined> previous_;  // directions x sources, step last_step_
+  ExtraView buffer_;
+};
+
+}  // namespace pano4d

@@ -1,0 +1,97 @@
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "src/render/gaussians.h"
+
+namespace pano4d {
+
+// One expanded trajectory (a direction m at step e, over time) handed to a
+// prior: warped frames with holes, what to generate, and the geometry.
+struct PriorClip {
+  std::string name;                   // e.g. "step2_dir3": messages and folders
+  std::vector<cv::Mat> frames;        // CV_32FC3 RGB in [0, 1]; holes arbitrary
+  std::vector<cv::Mat> masks;         // CV_8UC1: 255 = generate, 0 = keep
+  std::vector<cv::Mat> depth;         // CV_32FC1 z at the target, 0 = none
+  std::vector<RasterCamera> cameras;  // the target cameras, one per frame
+  std::vector<int> times;             // frame time of each frame
+  // The source video at the same times (what a video model conditions on).
+  std::vector<cv::Mat> references;  // CV_32FC3 RGB in [0, 1]
+  std::vector<RasterCamera> reference_cameras;
+
+  // Throws pano4d::Error naming the field when counts, sizes or types
+  // disagree (every per-frame vector has frames.size() entries, all of the
+  // cameras' sizes).
+  void Check() const;
+};
+
+// What a prior gives back: every frame with its masked pixels filled
+// (CV_32FC3, [0, 1], finite) and, where the prior knows it, the depth of
+// what it filled (CV_32FC1, 0 = unknown; may be empty).
+struct PriorResult {
+  std::vector<cv::Mat> frames;
+  std::vector<cv::Mat> depth;
+  std::string prior;  // the name of the prior that produced it
+  std::string note;   // e.g. why a fallback was used; empty when none
+};
+
+class Prior {
+ public:
+  virtual ~Prior() = default;
+  virtual std::string name() const = 0;
+  // Fills the clip's masked pixels. Unmasked pixels come back unchanged.
+  // Throws pano4d::Error when it cannot.
+  virtual PriorResult Fill(const PriorClip& clip) = 0;
+};
+
+// The CPU default, with no model weights: geometry first, then classical
+// inpainting, consistent over time.
+//  1. Content seen at other times: each frame's holes are filled from the
+//     known pixels of the clip's other frames (nearest in time first),
+//     forward-warped with their depth into its camera.
+//  2. What nothing saw: a reference frame (the middle one) is inpainted
+//     (cv::inpaint, Telea), colour and depth, and its filled pixels are
+//     warped into the other frames, so that the same invented content
+//     appears at every time.
+//  3. What is still empty is inpainted per frame.
+class GeometryPrior : public Prior {
+ public:
+  std::string name() const override { return "geometry"; }
+  PriorResult Fill(const PriorClip& clip) override;
+};
+
+// The external-command plug-in for video diffusion models. `command` holds
+// {in} and {out}, replaced by folder paths (shell-quoted). {in} gets:
+//   frames/00000.png ...     the warped frames (8-bit RGB PNG)
+//   masks/00000.png ...      255 = generate, 0 = keep
+//   references/00000.png ... the source frames at the same times
+//   meta.json                count, width, height, times, cameras (as
+//                            CameraToJson), reference_cameras, clip name
+// The command must write {out}/frames/00000.png ... : the same count and
+// size, 8 or 16-bit RGB. Anything else (a non-zero exit, a missing, extra-
+// short or wrongly sized frame, a file that does not decode) is logged as an
+// error naming the command and the problem, and `fallback` fills the clip
+// instead (result.note says why); the work folder is kept for inspection.
+class CommandPrior : public Prior {
+ public:
+  CommandPrior(std::string command, std::filesystem::path work_dir,
+               std::unique_ptr<Prior> fallback);
+  std::string name() const override { return "command"; }
+  PriorResult Fill(const PriorClip& clip) override;
+
+ private:
+  std::string command_;
+  std::filesystem::path work_dir_;
+  std::unique_ptr<Prior> fallback_;
+};
+
+// V_refined = M * filled + (1 - M) * warped, per frame (M: 255 = filled).
+cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,
+                  const cv::Mat& mask);
+
+}  // namespace pano4d

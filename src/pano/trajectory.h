@@ -1,0 +1,72 @@
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
+
+#include "src/render/gaussians.h"
+
+namespace pano4d {
+
+// The expansion's geometry (DESIGN.md, eqs. dir1 and dir2; paper defaults).
+struct ExpansionGeometry {
+  int directions = 8;           // M
+  int steps = 6;                // E
+  double alpha_degrees = 15.0;  // angle per step
+  // Ablation: translate cameras in the tangent plane instead of orbiting
+  // them about the panorama's centre (see PlanarCamera).
+  bool planar = false;
+
+  void Check() const;  // throws pano4d::Error naming the field
+};
+
+// eq. dir1: d_m = cos(2 pi m / M) right + sin(2 pi m / M) up, in world
+// coordinates, with right (+x) and up (-y) the reference camera's axes:
+// unit and orthogonal to its viewing vector n.
+Eigen::Vector3d TangentDirection(const RasterCamera& reference, int m,
+                                 int directions);
+// The viewing vector n of a camera (its +z axis) in world coordinates.
+Eigen::Vector3d ViewingDirection(const RasterCamera& camera);
+// a_m = n x d_m (unit): the axis step e rotates about.
+Eigen::Vector3d RotationAxis(const Eigen::Vector3d& n,
+                             const Eigen::Vector3d& d_m);
+// eq. dir2: s = n cos(angle) + (a_m x n) sin(angle).
+Eigen::Vector3d ExpandedDirection(const Eigen::Vector3d& n,
+                                  const Eigen::Vector3d& axis, double angle);
+
+// The expanded camera: `source` orbited about `center` by `angle` radians
+// about `axis`: Q = AngleAxis(angle, axis), c' = center + Q (c - center),
+// cam_from_world rotation R' = R Q^T. angle 0 gives `source` back.
+RasterCamera OrbitCamera(const RasterCamera& source,
+                         const Eigen::Vector3d& center,
+                         const Eigen::Vector3d& axis, double angle);
+// The planar ablation: the same orientation, the centre moved along d_m by
+// |c - center| tan(angle), so that the panorama's centre shifts in the view
+// by the same angle as it would in the orbit. angle must be below 90 deg.
+RasterCamera PlanarCamera(const RasterCamera& source,
+                          const Eigen::Vector3d& center,
+                          const Eigen::Vector3d& d_m, double angle);
+
+// One camera of the expansion: direction m, step e (angle e alpha), frame
+// time t, orbiting the source camera of that time.
+struct ExpandedView {
+  int m = 0, e = 0, t = 0;
+  RasterCamera camera;
+};
+
+// The views of step e (1..E) for every direction and the given source
+// cameras (one per time, `times` alongside). The directions come from
+// `reference` (the first frame's camera), as in the paper, so that every
+// time moves the same way.
+std::vector<ExpandedView> ExpansionViews(
+    const ExpansionGeometry& geometry, const RasterCamera& reference,
+    const Eigen::Vector3d& center, const std::vector<RasterCamera>& sources,
+    const std::vector<int>& times, int e);
+
+// {"m", "e", "t", "camera": {width, height, fx, fy, cx, cy, qvec, tvec}}
+// with COLMAP's qvec (w, x, y, z) and tvec of cam_from_world.
+nlohmann::json ToJson(const ExpandedView& view);
+nlohmann::json CameraToJson(const RasterCamera& camera);
+
+}  // namespace pano4d

@@ -1,0 +1,390 @@
+#include "src/pano/prior.h"
+
+#include "src/pano/warp.h"
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 32, kHeight = 24;
+constexpr float kFocal = 30, kPlaneZ = 2;
+
+// A camera looking down +z from (centre_x, 0, 0): on the plane z = 2 one
+// unit of centre_x is fx / z = 15 pixels of image shift.
+RasterCamera PlaneCamera(float centre_x) {
+  RasterCamera c;
+  c.width = kWidth;
+  c.height = kHeight;
+  c.fx = c.fy = kFocal;
+  c.cx = kWidth / 2.0f;
+  c.cy = kHeight / 2.0f;
+  c.translation = Eigen::Vector3f(-centre_x, 0, 0);
+  return c;
+}
+
+// The plane's world point under pixel (x, y) of a PlaneCamera.
+cv::Point2d WorldPoint(float centre_x, int x, int y) {
+  return {centre_x + (x + 0.5 - kWidth / 2.0) / kFocal * kPlaneZ,
+          (y + 0.5 - kHeight / 2.0) / kFocal * kPlaneZ};
+}
+
+// Varies within a few pixels, so that inpainting cannot guess it.
+cv::Vec3f PlaneColour(const cv::Point2d& p) {
+  return cv::Vec3f(static_cast<float>(0.5 + 0.4 * std::sin(8 * p.x)),
+                   static_cast<float>(0.5 + 0.4 * std::cos(6 * p.y)),
+                   static_cast<float>(0.5 + 0.4 * std::sin(5 * (p.x + p.y))));
+}
+
+// A static textured plane seen from cameras at `centres` (times 0, 1, ...);
+// `hole(frame, world point)` says which pixels to mask. Holes hold NaN.
+PriorClip PlaneClip(const std::vector<float>& centres,
+                    const std::function<bool(int, const cv::Point2d&)>& hole) {
+  PriorClip clip;
+  clip.name = "step1_dir0";
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    cv::Mat rgb(kHeight, kWidth, CV_32FC3), mask(kHeight, kWidth, CV_8UC1);
+    cv::Mat depth(kHeight, kWidth, CV_32FC1, cv::Scalar(kPlaneZ));
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        const cv::Point2d p = WorldPoint(centres[i], x, y);
+        const bool masked = hole(static_cast<int>(i), p);
+        mask.at<uint8_t>(y, x) = masked ? 255 : 0;
+        rgb.at<cv::Vec3f>(y, x) = masked ? cv::Vec3f::all(NAN) : PlaneColour(p);
+        if (masked) depth.at<float>(y, x) = NAN;
+      }
+    }
+    clip.frames.push_back(rgb);
+    clip.masks.push_back(mask);
+    clip.depth.push_back(depth);
+    clip.cameras.push_back(PlaneCamera(centres[i]));
+    clip.times.push_back(static_cast<int>(i));
+    clip.references.push_back(
+        cv::Mat(kHeight, kWidth, CV_32FC3, cv::Scalar::all(0.25)));
+    clip.reference_cameras.push_back(PlaneCamera(0));
+  }
+  return clip;
+}
+
+bool AllFiniteInUnitRange(const cv::Mat& m) {
+  if (!cv::checkRange(m, true)) return false;
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(m.reshape(1), &lo, &hi);
+  return lo >= 0 && hi <= 1;
+}
+
+// Unmasked pixels bit-identical (NaN compares unequal, memcmp does not).
+void ExpectUnmaskedIdentical(const cv::Mat& expected, const cv::Mat& actual,
+                             const cv::Mat& mask) {
+  ASSERT_EQ(actual.type(), expected.type());
+  ASSERT_EQ(actual.size(), expected.size());
+  int differ = 0;
+  for (int y = 0; y < mask.rows; ++y) {
+    for (int x = 0; x < mask.cols; ++x) {
+      if (mask.at<uint8_t>(y, x)) continue;
+      differ += std::memcmp(expected.ptr(y, x), actual.ptr(y, x),
+                            expected.elemSize()) != 0;
+    }
+  }
+  EXPECT_EQ(differ, 0);
+}
+
+TEST(GeometryPriorTest, KeepsUnmaskedPixelsAndFillsEveryMaskedOne) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0, 1), z(1, 3);
+  PriorClip clip =
+      PlaneClip({0, 0.1f, 0.2f, 0.3f}, [](int, auto&) { return false; });
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        // Rough depth and colour on purpose; frame 2 keeps an empty mask.
+        const bool masked = i != 2 && (u(rng) < 0.3f || (x > 20 && y > 10));
+        clip.masks[i].at<uint8_t>(y, x) = masked ? 255 : 0;
+        clip.frames[i].at<cv::Vec3f>(y, x) =
+            masked ? cv::Vec3f::all(NAN) : cv::Vec3f(u(rng), u(rng), u(rng));
+        clip.depth[i].at<float>(y, x) = masked ? NAN : z(rng);
+      }
+    }
+  }
+  GeometryPrior prior;
+  const PriorResult result = prior.Fill(clip);
+  EXPECT_EQ(result.prior, "geometry");
+  EXPECT_TRUE(result.note.empty());
+  ASSERT_EQ(result.frames.size(), clip.frames.size());
+  ASSERT_EQ(result.depth.size(), clip.frames.size());
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
+    ExpectUnmaskedIdentical(clip.depth[i], result.depth[i], clip.masks[i]);
+    EXPECT_TRUE(AllFiniteInUnitRange(result.frames[i]));
+    EXPECT_TRUE(cv::checkRange(result.depth[i], true, nullptr, 0, 1e9));
+  }
+  // A frame with nothing to fill comes back as it was, NaN-free input or not.
+  EXPECT_EQ(cv::norm(result.frames[2], clip.frames[2], cv::NORM_INF), 0);
+}
+
+TEST(GeometryPriorTest, FillsAHoleWithWhatAnotherFrameSaw) {
+  // 1.95 pixels of shift per frame: the splat lands between pixels.
+  const std::vector<float> centres = {0, 0.13f, 0.26f};
+  const auto hole = [](int frame, const cv::Point2d& p) {
+    return frame == 1 && std::abs(p.x + 0.1) < 0.25 && std::abs(p.y) < 0.25;
+  };
+  const PriorClip clip = PlaneClip(centres, hole);
+  const int holes = cv::countNonZero(clip.masks[1]);
+  ASSERT_GT(holes, 40);
+
+  GeometryPrior prior;
+  const PriorResult result = prior.Fill(clip);
+  double max_error = 0, sum_error = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      if (!clip.masks[1].at<uint8_t>(y, x)) continue;
+      const cv::Vec3f truth = PlaneColour(WorldPoint(centres[1], x, y));
+      const double error =
+          cv::norm(result.frames[1].at<cv::Vec3f>(y, x) - truth, cv::NORM_INF);
+      max_error = std::max(max_error, error);
+      sum_error += error;
+      EXPECT_NEAR(result.depth[1].at<float>(y, x), kPlaneZ, 1e-3);
+    }
+  }
+  EXPECT_LT(max_error, 0.06);
+  EXPECT_LT(sum_error / holes, 0.02);
+}
+
+TEST(GeometryPriorTest, InventsUnseenContentOnceForEveryFrame) {
+  // 6 pixels of shift per frame; the region W (x in [-0.45, 0.12)) is masked
+  // in every frame: inside frame 1 (the reference), at frame 2's left edge,
+  // where inpainting frame 2 alone would see only W's right side.
+  const std::vector<float> centres = {0, 0.4f, 0.8f};
+  const auto hole = [](int, const cv::Point2d& p) {
+    return p.x >= -0.45 && p.x < 0.12 && std::abs(p.y) < 0.45;
+  };
+  const PriorClip clip = PlaneClip(centres, hole);
+  ASSERT_GT(cv::countNonZero(clip.masks[2].colRange(0, 1)), 0);
+
+  GeometryPrior prior;
+  const PriorResult result = prior.Fill(clip);
+  for (int other : {0, 2}) {
+    SCOPED_TRACE("frame " + std::to_string(other));
+    const int shift = other == 0 ? -6 : 6;  // reference x = x + shift
+    double max_difference = 0;
+    int compared = 0;
+    // Within kWarpMaxCrack of its rim the hole can be bridged as a warp
+    // crack (the same surface on both sides); compare the interior.
+    cv::Mat interior;
+    cv::erode(clip.masks[other], interior, cv::Mat(), cv::Point(-1, -1),
+              kWarpMaxCrack, cv::BORDER_REPLICATE);
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        const int xr = x + shift;
+        if (!interior.at<uint8_t>(y, x) || xr < 0 || xr >= kWidth) continue;
+        ASSERT_TRUE(clip.masks[1].at<uint8_t>(y, xr));
+        max_difference = std::max(
+            max_difference, cv::norm(result.frames[other].at<cv::Vec3f>(y, x) -
+                                         result.frames[1].at<cv::Vec3f>(y, xr),
+                                     cv::NORM_INF));
+        ++compared;
+      }
+    }
+    EXPECT_GT(compared, 20);
+    EXPECT_LT(max_difference, 0.02);
+    EXPECT_TRUE(AllFiniteInUnitRange(result.frames[other]));
+  }
+}
+
+TEST(GeometryPriorTest, AClipMaskedEverywhereComesBackFinite) {
+  const PriorClip clip =
+      PlaneClip({0, 0.1f, 0.2f}, [](int, auto&) { return true; });
+  std::ostringstream log;
+  SetLogSink(&log);
+  const PriorResult result = GeometryPrior().Fill(clip);
+  SetLogSink(nullptr);
+  EXPECT_NE(log.str().find("masked everywhere"), std::string::npos)
+      << log.str();
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    EXPECT_TRUE(AllFiniteInUnitRange(result.frames[i]));
+    EXPECT_TRUE(cv::checkRange(result.depth[i], true, nullptr, 0, 1e9));
+  }
+}
+
+TEST(PriorClipTest, CheckNamesTheFieldThatDisagrees) {
+  const auto hole = [](int, const cv::Point2d& p) { return p.x > 0; };
+  PriorClip clip = PlaneClip({0, 0.1f}, hole);
+  EXPECT_NO_THROW(clip.Check());
+
+  PriorClip fewer_masks = clip;
+  fewer_masks.masks.pop_back();
+  try {
+    fewer_masks.Check();
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "masks");
+    EXPECT_EQ(e.value(), "1");
+  }
+
+  PriorClip smaller_depth = clip;
+  smaller_depth.depth[1] = cv::Mat(12, 16, CV_32FC1, cv::Scalar(1));
+  try {
+    smaller_depth.Check();
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "depth[1]");
+    EXPECT_NE(std::string(e.what()).find("32x24"), std::string::npos);
+  }
+
+  PriorClip wrong_type = clip;
+  wrong_type.masks[0] = cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(0));
+  EXPECT_THROW(wrong_type.Check(), Error);
+  PriorClip no_times = clip;
+  no_times.times.clear();
+  EXPECT_THROW(no_times.Check(), Error);
+  EXPECT_THROW(PriorClip().Check(), Error);
+}
+
+TEST(CompositeTest, SelectsPerPixelAndRejectsMismatches) {
+  const cv::Mat warped(2, 2, CV_32FC3, cv::Scalar::all(0.1));
+  const cv::Mat filled(2, 2, CV_32FC3, cv::Scalar::all(0.9));
+  cv::Mat mask(2, 2, CV_8UC1, cv::Scalar(0));
+  mask.at<uint8_t>(1, 0) = 255;
+  const cv::Mat out = Composite(warped, filled, mask);
+  EXPECT_EQ(out.at<cv::Vec3f>(1, 0), cv::Vec3f::all(0.9f));
+  EXPECT_EQ(out.at<cv::Vec3f>(0, 0), cv::Vec3f::all(0.1f));
+  EXPECT_THROW(Composite(warped, cv::Mat(3, 2, CV_32FC3), mask), Error);
+  EXPECT_THROW(Composite(warped, filled, cv::Mat(2, 2, CV_32FC1)), Error);
+}
+
+// --- CommandPrior, with tests/pano/fake_prior.cc as the model -------------
+
+std::string FakeCommand(const std::string& mode) {
+  return "'" + std::string(PANO4D_FAKE_PRIOR) + "' " + mode + " {in} {out}";
+}
+
+PriorClip HoleClip() {
+  return PlaneClip({0, 0.13f, 0.26f}, [](int frame, const cv::Point2d& p) {
+    return frame != 0 && std::abs(p.x - 0.1) < 0.2 && std::abs(p.y) < 0.2;
+  });
+}
+
+TEST(CommandPriorTest, RoundTripFillsMasksWithTheCommandsOutput) {
+  testing::TempDir dir;
+  const PriorClip clip = HoleClip();
+  CommandPrior prior(FakeCommand("fill"), dir.path(),
+                     std::make_unique<GeometryPrior>());
+  const PriorResult result = prior.Fill(clip);
+  EXPECT_EQ(result.prior, "command");
+  EXPECT_TRUE(result.note.empty()) << result.note;
+  ASSERT_EQ(result.frames.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
+    int magenta = 0;
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        magenta += clip.masks[i].at<uint8_t>(y, x) &&
+                   result.frames[i].at<cv::Vec3f>(y, x) == cv::Vec3f(1, 0, 1);
+      }
+    }
+    EXPECT_EQ(magenta, cv::countNonZero(clip.masks[i]));
+  }
+  const fs::path in = dir / "step1_dir0" / "in";
+  for (const char* folder : {"frames", "masks", "references"}) {
+    EXPECT_TRUE(fs::is_regular_file(in / folder / "00002.png")) << folder;
+  }
+  const Json meta = ReadJson(in / "meta.json");
+  EXPECT_EQ(meta.at("count"), 3);
+  EXPECT_EQ(meta.at("width"), kWidth);
+  EXPECT_EQ(meta.at("height"), kHeight);
+  EXPECT_EQ(meta.at("clip"), "step1_dir0");
+  EXPECT_EQ(meta.at("times"), Json({0, 1, 2}));
+  ASSERT_EQ(meta.at("cameras").size(), 3u);
+  EXPECT_EQ(meta.at("cameras")[1].at("width"), kWidth);
+  EXPECT_EQ(meta.at("reference_cameras").size(), 3u);
+}
+
+struct FailureCase {
+  std::string mode;
+  std::string problem;  // what the note must say
+};
+
+class CommandPriorFailureTest : public ::testing::TestWithParam<FailureCase> {};
+
+TEST_P(CommandPriorFailureTest, FallsBackToTheGeometryPriorAndSaysWhy) {
+  testing::TempDir dir;
+  const PriorClip clip = HoleClip();
+  CommandPrior prior(FakeCommand(GetParam().mode), dir.path(),
+                     std::make_unique<GeometryPrior>());
+  std::ostringstream log;
+  SetLogSink(&log);
+  const PriorResult result = prior.Fill(clip);
+  SetLogSink(nullptr);
+
+  EXPECT_EQ(result.prior, "geometry");
+  EXPECT_NE(result.note.find(GetParam().problem), std::string::npos)
+      << result.note;
+  EXPECT_NE(result.note.find("step1_dir0"), std::string::npos) << result.note;
+  EXPECT_NE(log.str().find("falling back to the geometry prior"),
+            std::string::npos)
+      << log.str();
+  EXPECT_NE(log.str().find(GetParam().mode + " {in} {out}"), std::string::npos)
+      << log.str();
+  ASSERT_EQ(result.frames.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
+    EXPECT_TRUE(AllFiniteInUnitRange(result.frames[i]));
+  }
+  // Nothing lost: the inputs stay for inspection.
+  EXPECT_TRUE(
+      fs::is_regular_file(dir / "step1_dir0" / "in" / "frames" / "00000.png"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "step1_dir0" / "in" / "meta.json"));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Modes, CommandPriorFailureTest,
+    ::testing::Values(
+        FailureCase{"fail", "status 3: \"fake prior: failing on request\""},
+        FailureCase{"small", "is 16x12, expected 32x24"},
+        FailureCase{"few", "found 2 of 3 frames"},
+        FailureCase{"garbage", "00000.png: cannot be decoded"}),
+    [](const auto& info) { return info.param.mode; });
+
+TEST(CommandPriorTest, WithoutAFallbackAFailureIsAnError) {
+  testing::TempDir dir;
+  CommandPrior prior(FakeCommand("fail"), dir.path(), nullptr);
+  try {
+    prior.Fill(HoleClip());
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("status 3"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(CommandPriorTest, RejectsATemplateWithoutItsFolders) {
+  testing::TempDir dir;
+  try {
+    CommandPrior("model --out {out}", dir.path(), nullptr);
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("{in}"), std::string::npos);
+  }
+  EXPECT_THROW(CommandPrior("model {in}", dir.path(), nullptr), Error);
+}
+
+}  // namespace
+}  // namespace pano4d
