@@ -1,5 +1,6 @@
 #include "src/geometry/inpaint.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,38 @@ cv::Mat InpaintTelea(const cv::Mat& image, const cv::Mat& mask,
     channel = InpaintChannel(channel, mask, max_value, radius);
   cv::Mat out;
   cv::merge(channels, out);
+  return out;
+}
+
+cv::Mat FillDepthFromFarthest(const cv::Mat& depth, const cv::Mat& mask) {
+  if (depth.type() != CV_32FC1 || mask.type() != CV_8UC1 ||
+      mask.size() != depth.size()) {
+    throw Error("depth fill", "depth/mask",
+                std::to_string(depth.cols) + "x" + std::to_string(depth.rows),
+                "expected a CV_32FC1 depth map and a CV_8UC1 mask of its size");
+  }
+  cv::Mat known = depth.clone();
+  known.setTo(0, mask);
+  cv::Mat out = known.clone();
+  const int directions[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (int y = 0; y < known.rows; ++y) {
+    for (int x = 0; x < known.cols; ++x) {
+      if (known.at<float>(y, x) > 0) continue;
+      float farthest = 0;
+      for (const auto& d : directions) {
+        for (int xx = x + d[0], yy = y + d[1];
+             xx >= 0 && yy >= 0 && xx < known.cols && yy < known.rows;
+             xx += d[0], yy += d[1]) {
+          const float z = known.at<float>(yy, xx);
+          if (z > 0) {
+            farthest = std::max(farthest, z);
+            break;
+          }
+        }
+      }
+      out.at<float>(y, x) = farthest;
+    }
+  }
   return out;
 }
 

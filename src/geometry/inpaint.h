@@ -18,4 +18,12 @@ namespace pano4d {
 cv::Mat InpaintTelea(const cv::Mat& image, const cv::Mat& mask,
                      double max_value, double radius);
 
+// Depth for the pixels of a hole (mask non-zero, or depth <= 0): each takes
+// the farthest of the nearest known depths to its left, right, above and
+// below. A hole the video never saw is mostly a disocclusion,
+// the background behind a nearer object: averaging (Telea) would put its
+// points in mid-air between the two and float them in front of what other
+// views see. Pixels that no known depth reaches stay 0.
+cv::Mat FillDepthFromFarthest(const cv::Mat& depth, const cv::Mat& mask);
+
 }  // namespace pano4d

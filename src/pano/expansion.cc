@@ -29,8 +29,6 @@ constexpr float kWarpAlpha = 0.5f;
 // A pixel of M_e that the current Gaussians already cover this much gets no
 // new Gaussian (a later step sees what an earlier one added).
 constexpr float kCoveredAlpha = 0.5f;
-// Pixels around a hole that depth inpainting draws from.
-constexpr double kDepthInpaintRadius = 5.0;
 
 std::string Name(const char* prefix, int value, int width) {
   std::ostringstream s;
@@ -57,7 +55,8 @@ cv::Mat Quantised(const cv::Mat& rgb) {
 }
 
 // Depth of a refined frame: the warp's where it had one, the prior's where
-// it filled and knew it, inpainted from around the hole elsewhere.
+// it filled and knew it, elsewhere the farthest depth around the hole
+// (FillDepthFromFarthest: unseen content is mostly background).
 cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
                      const cv::Mat& prior_depth) {
   cv::Mat depth = warped_depth.clone();
@@ -65,12 +64,54 @@ cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
   cv::Mat missing = depth <= 0;
   const int count = cv::countNonZero(missing);
   if (count > 0 && count < static_cast<int>(depth.total())) {
-    double max_depth = 0;
-    cv::minMaxLoc(depth, nullptr, &max_depth);
-    InpaintTelea(depth, missing, max_depth, kDepthInpaintRadius)
-        .copyTo(depth, missing);
+    FillDepthFromFarthest(depth, missing).copyTo(depth, missing);
   }
   return depth;
+}
+
+// Unseen content lies where no training view looked through: a candidate
+// point that some training frame sees in front of the surface it observed
+// (by more than kFreeSpaceTolerance, relative) is in space the video saw to
+// be empty, and would float in front of that surface in novel views.
+constexpr float kFreeSpaceTolerance = 0.05f;
+
+// Drops the points (and their depths) that a training view sees through.
+// Returns the count dropped.
+std::int64_t KeepOutOfSeenFreeSpace(const std::vector<TrainingView>& views,
+                                    PointCloud* points,
+                                    std::vector<double>* depths) {
+  std::vector<std::uint8_t> keep(points->size(), 1);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size()); ++i) {
+    const Eigen::Vector3f& x = points->points[i];
+    for (const TrainingView& v : views) {
+      if (v.depth.empty()) continue;
+      const Eigen::Vector3f c = v.camera.rotation * x + v.camera.translation;
+      if (!(c.z() > 0)) continue;
+      const float u = v.camera.fx * c.x() / c.z() + v.camera.cx;
+      const float w = v.camera.fy * c.y() / c.z() + v.camera.cy;
+      if (!(u >= 0 && w >= 0 && u < v.camera.width && w < v.camera.height))
+        continue;
+      const float seen = v.depth[static_cast<std::size_t>(w) * v.camera.width +
+                                 static_cast<std::size_t>(u)];
+      if (seen > 0 && c.z() < seen * (1 - kFreeSpaceTolerance)) {
+        keep[i] = 0;
+        break;
+      }
+    }
+  }
+  PointCloud kept;
+  std::vector<double> kept_depths;
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    kept.points.push_back(points->points[i]);
+    kept.colors.push_back(points->colors[i]);
+    kept_depths.push_back((*depths)[i]);
+  }
+  const auto rejected = static_cast<std::int64_t>(points->size() - kept.size());
+  *points = std::move(kept);
+  *depths = std::move(kept_depths);
+  return rejected;
 }
 
 std::uint64_t SplitMix64(std::uint64_t x) {
@@ -139,7 +180,8 @@ std::string ExpansionStepReport::Brief() const {
   s << "expansion step " << step << " (" << angle_degrees << " deg): " << views
     << " views, holes " << 100 * hole_fraction << "% (chained "
     << 100 * prefilled_fraction << "% of them), " << new_gaussians
-    << " new Gaussians, prior " << prior;
+    << " new Gaussians (" << rejected_in_free_space
+    << " candidates in seen free space dropped), prior " << prior;
   if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
   s << ", " << seconds << " s";
   return s.str();
@@ -151,6 +193,7 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"views", views},
           {"hole_fraction", hole_fraction},
           {"prefilled_fraction", prefilled_fraction},
+          {"rejected_in_free_space", rejected_in_free_space},
           {"new_gaussians", new_gaussians},
           {"prior", prior},
           {"fallbacks", fallbacks},
@@ -358,6 +401,10 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
   report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
 
+  if (options_.gaussian_refinement && points.size() > 0) {
+    report.rejected_in_free_space =
+        KeepOutOfSeenFreeSpace(views, &points, &point_depths);
+  }
   if (options_.gaussian_refinement && points.size() > 0) {
     const double voxel =
         Median(point_depths) * options_.voxel_pixels / Median(focals);

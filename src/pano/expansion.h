@@ -57,6 +57,8 @@ struct ExpansionStepReport {
   double hole_fraction = 0.0;       // mean over views of |M_e| / pixels
   double prefilled_fraction = 0.0;  // of M_e, filled by chaining step e-1
   std::int64_t new_gaussians = 0;
+  std::int64_t rejected_in_free_space =
+      0;              // candidates a video frame saw through
   std::string prior;  // the prior that filled (or "command -> geometry")
   int fallbacks = 0;
   double seconds = 0.0;
@@ -76,7 +78,9 @@ class Expansion {
   // Step e (1..E; angle e alpha): depth rendered at the source cameras and
   // held fixed; the original frames warped into every direction's cameras;
   // holes pre-filled from step e-1's refined frames when it ran; the prior
-  // fills the rest; Gaussians added in M_e; refinement views queued.
+  // fills the rest; Gaussians added in M_e where the current ones show
+  // nothing (rendered alpha < 0.5) and no training frame saw empty space;
+  // refinement views (L_refine on M_e) queued.
   ExpansionStepReport RunStep(Trainer* trainer, int e);
 
   // The Trainer::extra_view hook: a refinement view for this iteration,

@@ -133,9 +133,7 @@ bool InpaintHoles(WarpResult* state) {
   rgb.copyTo(state->rgb, hole);
   const cv::Mat no_depth = hole | (state->depth <= 0);
   if (cv::countNonZero(no_depth) < static_cast<int>(no_depth.total())) {
-    double max_depth = 0;
-    cv::minMaxLoc(state->depth, nullptr, &max_depth);
-    const cv::Mat depth = InpaintFloat(state->depth, no_depth, max_depth);
+    const cv::Mat depth = FillDepthFromFarthest(state->depth, no_depth);
     depth.copyTo(state->depth, hole);
   }
   state->mask.setTo(0);

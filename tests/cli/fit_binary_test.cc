@@ -167,9 +167,23 @@ pid_t Spawn(const std::vector<std::string>& args, const fs::path& log) {
 }
 
 TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
-  const std::vector<std::string> options = {
-      "--iterations",     "400", "--checkpoint-every", "25",
-      "--validate-every", "200", "--deterministic"};
+  // With expansion (steps at 100 and 200, chained), so that the resumed run
+  // has to reload the expansion's products.
+  const std::vector<std::string> options = {"--iterations",
+                                            "400",
+                                            "--checkpoint-every",
+                                            "25",
+                                            "--validate-every",
+                                            "200",
+                                            "--deterministic",
+                                            "--expand-every",
+                                            "100",
+                                            "--expansion-steps",
+                                            "2",
+                                            "--directions",
+                                            "2",
+                                            "--expansion-stride",
+                                            "4"};
   // Uninterrupted.
   const fs::path straight = Workspace("ws_straight");
   {
@@ -185,11 +199,18 @@ TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
   const pid_t pid = Spawn(args, killed / "fit1.log");
   ASSERT_GT(pid, 0);
   const fs::path ckpt = killed / "pano4d/checkpoints/fit.ckpt";
+  const fs::path steps = killed / "pano4d/expansion/steps.json";
+  // Once a checkpoint newer than the first expansion step is on disk.
+  const auto ready = [&] {
+    std::error_code ec;
+    return fs::exists(steps, ec) && fs::exists(ckpt, ec) &&
+           fs::last_write_time(ckpt, ec) > fs::last_write_time(steps, ec);
+  };
   const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (!fs::exists(ckpt) && std::chrono::steady_clock::now() < deadline)
+      std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  while (!ready() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  ASSERT_TRUE(fs::exists(ckpt)) << Slurp(killed / "fit1.log");
+  ASSERT_TRUE(ready()) << Slurp(killed / "fit1.log");
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -205,13 +226,66 @@ TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
       nlohmann::json::parse(Slurp(straight / "pano4d/fit.json"));
   const nlohmann::json b =
       nlohmann::json::parse(Slurp(killed / "pano4d/fit.json"));
-  EXPECT_GT(b.at("resumed_at").get<int>(), 0);
+  EXPECT_GT(b.at("resumed_at").get<int>(), 100);
+  EXPECT_EQ(a.at("expansion").at("steps").size(), 2u);
+  EXPECT_EQ(a.at("static_gaussians"), b.at("static_gaussians"));
   EXPECT_EQ(a.at("iterations"), b.at("iterations"));
   EXPECT_EQ(a.at("metrics"), b.at("metrics"));
   EXPECT_EQ(a.at("train_psnr"), b.at("train_psnr"));
   // The final state, byte for byte.
   EXPECT_TRUE(ReadFileBytes(straight / "pano4d/checkpoints/fit.ckpt") ==
               ReadFileBytes(ckpt));
+}
+
+// Expansion products where users and viewers look for them, and a video
+// prior that fails: the CPU prior fills in, the log says why, the fit ends.
+TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
+  const fs::path ws = Workspace("ws_expansion");
+  const fs::path log = ws / "fit.log";
+  ASSERT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 60 --expand-every 20 "
+                          "--expansion-steps 2 --directions 2 "
+                          "--expansion-stride 4 --panorama-width 128 "
+                          "--prior-cmd '" PANO4D_FAKE_PRIOR " fail {in} {out}'",
+                      log),
+            0)
+      << Slurp(log);
+  const std::string text = Slurp(log);
+  EXPECT_NE(text.find("falling back to the geometry prior"), std::string::npos)
+      << text;
+  const nlohmann::json fit =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  const nlohmann::json& steps = fit.at("expansion").at("steps");
+  ASSERT_EQ(steps.size(), 2u);
+  EXPECT_GT(steps[0].at("fallbacks").get<int>(), 0);
+  EXPECT_GT(steps[1].at("prefilled_fraction").get<double>(), 0.0);
+  const fs::path e = ws / "pano4d/expansion";
+  // tiny: 8 frames, every 4th expanded: 2 directions x 2 steps x 2 frames.
+  const nlohmann::json traj =
+      nlohmann::json::parse(Slurp(e / "trajectories.json"));
+  EXPECT_EQ(traj.at("views").size(), 8u);
+  const std::string images = Slurp(e / "colmap/images.txt");
+  EXPECT_NE(images.find("source/"), std::string::npos);
+  EXPECT_NE(images.find("step_02/dir_1/"), std::string::npos);
+  EXPECT_TRUE(fs::exists(e / "colmap/cameras.txt"));
+  EXPECT_TRUE(fs::exists(e / "step_02/dir_1/refined/00004.png"));
+  EXPECT_TRUE(fs::exists(ws / "pano4d/panorama/static.png"));
+  EXPECT_TRUE(fs::exists(ws / "pano4d/panorama/00007.png"));
+  // The inputs the prior got are kept for inspection.
+  EXPECT_TRUE(fs::exists(e / "prior/step01_dir0/in/meta.json"));
+
+  // --no-expansion: the same fit without it.
+  const fs::path plain = Workspace("ws_no_expansion");
+  ASSERT_EQ(RunPano4d("fit --workspace '" + plain.string() +
+                          "' --iterations 60 --expand-every 20 --no-expansion",
+                      plain / "fit.log"),
+            0);
+  const nlohmann::json fit2 =
+      nlohmann::json::parse(Slurp(plain / "pano4d/fit.json"));
+  EXPECT_TRUE(fit2.at("expansion").is_null());
+  EXPECT_FALSE(fs::exists(plain / "pano4d/expansion"));
+  EXPECT_LT(fit2.at("static_gaussians").get<int>(),
+            fit.at("static_gaussians").get<int>());
 }
 
 }  // namespace

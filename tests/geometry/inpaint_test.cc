@@ -46,5 +46,24 @@ TEST(InpaintTest, RefusesWhatItCannotInpaint) {
   EXPECT_THROW(InpaintTelea(image, cv::Mat(4, 4, CV_8UC1), 0, 3), Error);
 }
 
+// A disocclusion: a near object (depth 1) beside a far wall (depth 5) with a
+// hole between them. The hole takes the wall's depth, not a mix.
+TEST(InpaintTest, DepthHolesTakeTheFarthestSurfaceAround) {
+  cv::Mat depth(10, 20, CV_32FC1, cv::Scalar(5));
+  depth(cv::Rect(0, 0, 6, 10)).setTo(1);
+  cv::Mat mask(depth.size(), CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(6, 2, 5, 6)).setTo(255);
+  depth.setTo(0, mask);
+  const cv::Mat out = FillDepthFromFarthest(depth, mask);
+  for (int y = 2; y < 8; ++y)
+    for (int x = 6; x < 11; ++x) EXPECT_EQ(out.at<float>(y, x), 5.0f);
+  EXPECT_EQ(out.at<float>(5, 2), 1.0f);  // known pixels kept
+  // Nothing known: nothing to fill from.
+  const cv::Mat none =
+      FillDepthFromFarthest(cv::Mat(4, 4, CV_32FC1, cv::Scalar(0)),
+                            cv::Mat(4, 4, CV_8UC1, cv::Scalar(0)));
+  EXPECT_EQ(cv::countNonZero(none), 0);
+}
+
 }  // namespace
 }  // namespace pano4d

@@ -221,6 +221,40 @@ TEST(TrainerTest, DensificationRespectsTheCap) {
   EXPECT_GT(trainer.densified_total(), 0);
 }
 
+// The expansion's Gaussians join the static ones with fresh optimiser state,
+// up to the cap; training then goes on over all of them, and a checkpoint
+// written after the addition resumes.
+TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
+  testing::TempDir dir;
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
+  TrainerOptions options = FastOptions(30);
+  options.densify_from = 10;  // statistics must follow the added rows
+  options.densify_every = 10;
+  options.max_gaussians = static_cast<std::int64_t>(teacher.size()) + 50;
+  Trainer trainer(Perturbed(teacher, 5), views, options);
+  for (int i = 0; i < 5; ++i) trainer.Step();
+  const GaussianModel extra = RandomViewFillingScene(80, CameraAt(0), 4.0f, 9);
+  const std::size_t before = trainer.scene().statics.size();
+  EXPECT_EQ(trainer.AddStaticGaussians(extra), 50);  // 30 over the cap
+  ASSERT_EQ(trainer.scene().statics.size(), before + 50);
+  EXPECT_EQ(trainer.scene().statics.means[before * 3], extra.means[0]);
+  EXPECT_EQ(trainer.AddStaticGaussians(extra), 0);  // at the cap
+  while (!trainer.Done()) {
+    const StepReport r = trainer.Step();
+    ASSERT_TRUE(std::isfinite(r.loss));
+    EXPECT_EQ(r.skipped_rows, 0);
+  }
+  for (float v : trainer.scene().statics.means) ASSERT_TRUE(std::isfinite(v));
+  trainer.SaveCheckpoint(dir / "a.ckpt");
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options);
+  resumed.LoadCheckpoint(dir / "a.ckpt");
+  EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
+  GaussianModel wrong_degree = extra;
+  wrong_degree.sh_degree = extra.sh_degree + 1;
+  EXPECT_THROW(trainer.AddStaticGaussians(wrong_degree), Error);
+}
+
 TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {0.0f}, {0});

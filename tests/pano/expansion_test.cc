@@ -1,0 +1,190 @@
+#include "src/pano/expansion.h"
+
+#include <filesystem>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+#include "src/render/bench_scene.h"
+#include "src/render/rasterizer.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+
+constexpr int kWidth = 48, kHeight = 36;
+
+RasterCamera CameraAt(float x) {
+  RasterCamera camera = BenchCamera(kWidth, kHeight);
+  camera.translation = Eigen::Vector3f(-x, 0, 0);
+  return camera;
+}
+
+// A static scene seen by four cameras along x at times 0..3, and a trainer
+// holding a copy of it (as if fitted).
+std::unique_ptr<Trainer> MakeTrainer() {
+  GaussianScene scene;
+  scene.statics = RandomViewFillingScene(800, CameraAt(0), 3.0f, 5);
+  scene.dynamics.sh_degree = scene.statics.sh_degree;
+  scene.num_times = 4;
+  std::vector<TrainingView> views;
+  Rasterizer rasterizer;
+  RenderOutput out;
+  for (int t = 0; t < 4; ++t) {
+    TrainingView v;
+    v.name = "f" + std::to_string(t);
+    v.time = t;
+    v.camera = CameraAt(0.1f * t);
+    rasterizer.Forward(scene.statics, v.camera, {}, &out);
+    v.rgb = out.rgb;
+    v.depth = out.depth;
+    views.push_back(std::move(v));
+  }
+  TrainerOptions o;
+  o.iterations = 100;
+  o.densify_from = 1000000;
+  o.opacity_reset_every = 1000000;
+  return std::make_unique<Trainer>(std::move(scene), std::move(views), o);
+}
+
+ExpansionOptions SmallOptions() {
+  ExpansionOptions o;
+  o.geometry.directions = 2;
+  o.geometry.steps = 2;
+  o.geometry.alpha_degrees = 12;
+  o.time_stride = 1;
+  o.every = 10;
+  return o;
+}
+
+TEST(ExpansionScheduleTest, SpreadsTheStepsOverTheExpansions) {
+  ExpansionOptions o;  // E = 6, every 2000
+  std::vector<int> all;
+  for (std::int64_t it = 0; it <= 10000; ++it) {
+    const std::vector<int> due = StepsDueAt(o, it, 10000);
+    if (it == 2000) EXPECT_EQ(due, (std::vector<int>{1, 2}));
+    if (it == 4000) EXPECT_EQ(due, (std::vector<int>{3}));
+    if (it == 8000) EXPECT_EQ(due, (std::vector<int>{6}));
+    if (it % 2000 != 0 || it == 0 || it == 10000)
+      EXPECT_TRUE(due.empty()) << it;
+    all.insert(all.end(), due.begin(), due.end());
+  }
+  EXPECT_EQ(all, (std::vector<int>{1, 2, 3, 4, 5, 6}));
+  // One step at the full angle, at the first expansion.
+  o.one_step = true;
+  EXPECT_EQ(StepsDueAt(o, 2000, 10000), std::vector<int>{6});
+  EXPECT_TRUE(StepsDueAt(o, 4000, 10000).empty());
+  // A run too short for an expansion has none.
+  o.one_step = false;
+  EXPECT_TRUE(StepsDueAt(o, 2000, 2000).empty());
+  // More expansions than steps: one step each until they run out.
+  o.every = 100;
+  int steps = 0;
+  for (std::int64_t it = 0; it < 10000; ++it)
+    steps += static_cast<int>(StepsDueAt(o, it, 10000).size());
+  EXPECT_EQ(steps, 6);
+}
+
+TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer();
+  GeometryPrior prior;
+  Expansion expansion(SmallOptions(), dir.path(), &prior);
+  const std::size_t before = trainer->scene().statics.size();
+  const ExpansionStepReport r1 = expansion.RunStep(trainer.get(), 1);
+  EXPECT_EQ(r1.views, 2 * 4);
+  EXPECT_DOUBLE_EQ(r1.angle_degrees, 12.0);
+  EXPECT_GT(r1.hole_fraction, 0.0);  // the orbit looks past the video's edge
+  EXPECT_LT(r1.hole_fraction, 0.9);
+  EXPECT_EQ(r1.prefilled_fraction, 0.0);  // nothing to chain from
+  EXPECT_GT(r1.new_gaussians, 0);
+  EXPECT_EQ(trainer->scene().statics.size(),
+            before + static_cast<std::size_t>(r1.new_gaussians));
+  EXPECT_EQ(r1.prior, "geometry");
+  for (const char* kind : {"warped", "mask", "refined"})
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_1" /
+                                        kind / "00003.png"))
+        << kind;
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "cameras.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "frame.json"));
+  EXPECT_EQ(expansion.refinement_views(), 8u);
+
+  // Refinement views: chosen by the iteration alone, masks of the view.
+  const ExtraView* a = expansion.ViewFor(7);
+  ASSERT_NE(a, nullptr);
+  const std::vector<float> target = a->target;
+  EXPECT_EQ(a->mask.size(), static_cast<std::size_t>(kWidth * kHeight));
+  EXPECT_EQ(target.size(), a->mask.size() * 3);
+  EXPECT_DOUBLE_EQ(a->weight, 0.1);
+  expansion.ViewFor(8);
+  EXPECT_EQ(expansion.ViewFor(7)->target, target);
+  // A step trains on it: the hook is used and the loss counts it.
+  trainer->extra_view = [&](std::int64_t it) { return expansion.ViewFor(it); };
+  const StepReport step = trainer->Step();
+  EXPECT_GT(step.extra, 0.0);
+  EXPECT_TRUE(std::isfinite(step.loss));
+
+  // Step 2 chains step 1's refined frames into its holes.
+  const ExpansionStepReport r2 = expansion.RunStep(trainer.get(), 2);
+  EXPECT_GT(r2.hole_fraction, r1.hole_fraction);
+  EXPECT_GT(r2.prefilled_fraction, 0.0);
+  EXPECT_EQ(expansion.refinement_views(), 16u);
+  EXPECT_EQ(expansion.cameras().size(), 16u);
+}
+
+TEST(ExpansionTest, ReloadServesTheSameViewsAsTheRunThatWroteThem) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer();
+  GeometryPrior prior;
+  Expansion first(SmallOptions(), dir.path(), &prior);
+  first.RunStep(trainer.get(), 1);
+  first.RunStep(trainer.get(), 2);
+
+  Expansion resumed(SmallOptions(), dir.path(), &prior);
+  resumed.Reload(*trainer, 2);
+  ASSERT_EQ(resumed.refinement_views(), first.refinement_views());
+  for (std::int64_t it : {1, 5, 17, 40}) {
+    const ExtraView* a = first.ViewFor(it);
+    const std::vector<float> target = a->target;
+    const std::vector<std::uint8_t> mask = a->mask;
+    const ExtraView* b = resumed.ViewFor(it);
+    EXPECT_EQ(b->target, target) << it;
+    EXPECT_EQ(b->mask, mask) << it;
+    EXPECT_EQ(b->time, a->time);
+  }
+  // Missing products are an error that says what to do.
+  std::filesystem::remove_all(dir.path() / "step_01");
+  Expansion broken(SmallOptions(), dir.path(), &prior);
+  EXPECT_THROW(broken.Reload(*trainer, 2), Error);
+}
+
+TEST(ExpansionTest, WithoutGaussianRefinementNothingIsDistilled) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer();
+  GeometryPrior prior;
+  ExpansionOptions o = SmallOptions();
+  o.gaussian_refinement = false;
+  Expansion expansion(o, dir.path(), &prior);
+  const std::size_t before = trainer->scene().statics.size();
+  const ExpansionStepReport r = expansion.RunStep(trainer.get(), 1);
+  EXPECT_EQ(r.new_gaussians, 0);
+  EXPECT_EQ(trainer->scene().statics.size(), before);
+  EXPECT_EQ(expansion.ViewFor(3), nullptr);
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_0" /
+                                      "refined" / "00000.png"));
+}
+
+TEST(ExpansionTest, OptionsAreChecked) {
+  ExpansionOptions o;
+  o.every = 0;
+  EXPECT_THROW(o.Check(), Error);
+  o = ExpansionOptions();
+  o.refine_weight = -1;
+  EXPECT_THROW(o.Check(), Error);
+  GeometryPrior prior;
+  EXPECT_THROW(Expansion(ExpansionOptions(), "/tmp/unused", nullptr), Error);
+}
+
+}  // namespace
+}  // namespace pano4d
