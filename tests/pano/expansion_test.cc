@@ -63,11 +63,16 @@ TEST(ExpansionScheduleTest, SpreadsTheStepsOverTheExpansions) {
   std::vector<int> all;
   for (std::int64_t it = 0; it <= 10000; ++it) {
     const std::vector<int> due = StepsDueAt(o, it, 10000);
-    if (it == 2000) EXPECT_EQ(due, (std::vector<int>{1, 2}));
-    if (it == 4000) EXPECT_EQ(due, (std::vector<int>{3}));
-    if (it == 8000) EXPECT_EQ(due, (std::vector<int>{6}));
-    if (it % 2000 != 0 || it == 0 || it == 10000)
+    if (it == 2000) {
+      EXPECT_EQ(due, (std::vector<int>{1, 2}));
+    } else if (it == 4000) {
+      EXPECT_EQ(due, (std::vector<int>{3}));
+    } else if (it == 8000) {
+      EXPECT_EQ(due, (std::vector<int>{6}));
+    }
+    if (it % 2000 != 0 || it == 0 || it == 10000) {
       EXPECT_TRUE(due.empty()) << it;
+    }
     all.insert(all.end(), due.begin(), due.end());
   }
   EXPECT_EQ(all, (std::vector<int>{1, 2, 3, 4, 5, 6}));
