@@ -23,9 +23,6 @@ struct PlannedCommand {
 };
 
 const std::vector<PlannedCommand> kPlannedCommands = {
-    {"expand",
-     "Run one panoramic expansion step: trajectories, warping, prior, "
-     "refinement"},
     {"render",
      "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
     {"export",
@@ -85,6 +82,7 @@ int Main(int argc, char** argv) {
   AddSfmCommand(app, &action);
   AddDepthCommand(app, &action);
   AddFitCommand(app, &action);
+  AddExpandCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

@@ -40,5 +40,6 @@ void AddPlotCommand(CLI::App& app, Action* action);
 void AddSfmCommand(CLI::App& app, Action* action);
 void AddDepthCommand(CLI::App& app, Action* action);
 void AddFitCommand(CLI::App& app, Action* action);
+void AddExpandCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

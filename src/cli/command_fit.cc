@@ -58,15 +58,6 @@ struct FitCommandOptions {
 // Panoramas are written at this aspect (equirectangular: 2 x 1).
 constexpr int kPanoramaAspect = 2;
 
-// The prior the expansion fills holes with: the external command when given,
-// falling back to the CPU geometry prior when it fails.
-std::unique_ptr<Prior> MakePrior(const std::string& command,
-                                 const fs::path& work_dir) {
-  if (command.empty()) return std::make_unique<GeometryPrior>();
-  return std::make_unique<CommandPrior>(command, work_dir,
-                                        std::make_unique<GeometryPrior>());
-}
-
 // The last expansion step that ran before iteration `before` (0: none).
 int LastStepBefore(const ExpansionOptions& o, std::int64_t before,
                    int iterations) {

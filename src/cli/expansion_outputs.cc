@@ -44,6 +44,13 @@ void AddImage(const RasterCamera& c, const std::string& name,
 
 }  // namespace
 
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const std::filesystem::path& work_dir) {
+  if (command.empty()) return std::make_unique<GeometryPrior>();
+  return std::make_unique<CommandPrior>(command, work_dir,
+                                        std::make_unique<GeometryPrior>());
+}
+
 void WriteTrajectories(const std::filesystem::path& dir,
                        const std::vector<ExpandedView>& cameras,
                        const std::vector<TrainingView>& sources) {

@@ -3,14 +3,23 @@
 // trajectories as JSON and as a COLMAP model, and equirectangular panoramas.
 
 #include <filesystem>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "src/gs/scene.h"
 #include "src/gs/trainer.h"
 #include "src/pano/frame.h"
+#include "src/pano/prior.h"
 #include "src/pano/trajectory.h"
 
 namespace pano4d::cli {
+
+// The prior the expansion fills holes with: the external command when given
+// (its folders under work_dir), falling back to the CPU geometry prior when
+// it fails; the CPU prior alone otherwise.
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const std::filesystem::path& work_dir);
 
 // dir/trajectories.json (every expanded camera, with m, e, t) and
 // dir/colmap/{cameras,images,points3D}.txt: the training cameras (named

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <numeric>
 #include <sstream>
 
@@ -69,23 +70,31 @@ cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
   return depth;
 }
 
-// Unseen content lies where no training view looked through: a candidate
-// point that some training frame sees in front of the surface it observed
-// (by more than kFreeSpaceTolerance, relative) is in space the video saw to
-// be empty, and would float in front of that surface in novel views.
+// A view through which something was seen: its camera and z-depth of the
+// surfaces it saw (0 = nothing known).
+struct SeenDepth {
+  RasterCamera camera;
+  const float* depth;
+};
+
+// Unseen content lies where nothing looked through: a candidate point that
+// a training frame, or an expanded view where the warp brought a seen
+// surface, sees in front of that surface (by more than
+// kFreeSpaceTolerance, relative) is in space known to be empty, and would
+// hang in front of that surface in novel views.
 constexpr float kFreeSpaceTolerance = 0.05f;
 
-// Drops the points (and their depths) that a training view sees through.
-// Returns the count dropped.
-std::int64_t KeepOutOfSeenFreeSpace(const std::vector<TrainingView>& views,
+// Drops the points (and their depths) that a view sees through. Returns
+// the count dropped.
+std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& seen_by,
                                     PointCloud* points,
                                     std::vector<double>* depths) {
   std::vector<std::uint8_t> keep(points->size(), 1);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size()); ++i) {
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size());
+       ++i) {
     const Eigen::Vector3f& x = points->points[i];
-    for (const TrainingView& v : views) {
-      if (v.depth.empty()) continue;
+    for (const SeenDepth& v : seen_by) {
       const Eigen::Vector3f c = v.camera.rotation * x + v.camera.translation;
       if (!(c.z() > 0)) continue;
       const float u = v.camera.fx * c.x() / c.z() + v.camera.cx;
@@ -108,7 +117,8 @@ std::int64_t KeepOutOfSeenFreeSpace(const std::vector<TrainingView>& views,
     kept.colors.push_back(points->colors[i]);
     kept_depths.push_back((*depths)[i]);
   }
-  const auto rejected = static_cast<std::int64_t>(points->size() - kept.size());
+  const auto rejected =
+      static_cast<std::int64_t>(points->size() - kept.size());
   *points = std::move(kept);
   *depths = std::move(kept_depths);
   return rejected;
@@ -307,6 +317,12 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   std::filesystem::remove_all(dir);
   std::vector<Refined> current(directions * ns);
   PointCloud points;
+  // Where the training frames and this step's warps saw surfaces (the warps
+  // before chaining: observed content only).
+  std::vector<SeenDepth> seen_by;
+  std::deque<cv::Mat> warped_depths;  // stable addresses
+  for (const TrainingView& v : views)
+    if (!v.depth.empty()) seen_by.push_back({v.camera, v.depth.data()});
   std::vector<double> point_depths, focals;
   double hole_sum = 0, holes = 0, prefilled = 0;
   Json cameras_json = Json::array();
@@ -319,6 +335,8 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       WarpResult w =
           ForwardWarp(rgb[s], depth[s], sources_[s].camera, v.camera);
       original_masks[s] = w.mask.clone();
+      warped_depths.push_back(w.depth.clone());
+      seen_by.push_back({v.camera, warped_depths.back().ptr<float>()});
       const int hole = cv::countNonZero(w.mask);
       hole_sum += static_cast<double>(hole) / w.mask.total();
       holes += hole;
@@ -403,7 +421,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
 
   if (options_.gaussian_refinement && points.size() > 0) {
     report.rejected_in_free_space =
-        KeepOutOfSeenFreeSpace(views, &points, &point_depths);
+        KeepOutOfSeenFreeSpace(seen_by, &points, &point_depths);
   }
   if (options_.gaussian_refinement && points.size() > 0) {
     const double voxel =

@@ -92,6 +92,8 @@ class Expansion {
 
   const std::vector<ExpandedView>& cameras() const { return all_cameras_; }
   const PanoramaFrame& frame() const { return frame_; }
+  // Where step e's products go: out_dir/step_<e, two digits>.
+  std::filesystem::path StepDir(int e) const;
   std::size_t refinement_views() const { return views_.size(); }
 
  private:
@@ -112,7 +114,6 @@ class Expansion {
     cv::Mat depth;  // CV_32FC1
   };
   void Prepare(const Trainer& trainer);
-  std::filesystem::path StepDir(int e) const;
 
   ExpansionOptions options_;
   std::filesystem::path out_dir_;

@@ -274,6 +274,26 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
   // The inputs the prior got are kept for inspection.
   EXPECT_TRUE(fs::exists(e / "prior/step01_dir0/in/meta.json"));
 
+  // `pano4d expand`: one step at a time on the fitted Gaussians, chained.
+  const std::string expand = "expand --workspace '" + ws.string() +
+                             "' --directions 2 --expansion-steps 2 "
+                             "--expansion-stride 4 --panorama-width 64";
+  ASSERT_EQ(RunPano4d(expand, ws / "expand1.log"), 0)
+      << Slurp(ws / "expand1.log");
+  ASSERT_EQ(RunPano4d(expand, ws / "expand2.log"), 0)
+      << Slurp(ws / "expand2.log");
+  const nlohmann::json expand_steps =
+      nlohmann::json::parse(Slurp(ws / "pano4d/expand/steps.json"));
+  ASSERT_EQ(expand_steps.size(), 2u);
+  EXPECT_EQ(expand_steps[1].at("step").get<int>(), 2);
+  EXPECT_GT(expand_steps[1].at("prefilled_fraction").get<double>(), 0.0);
+  EXPECT_TRUE(fs::exists(ws / "pano4d/expand/step_02/dir_0/refined/00000.png"));
+  EXPECT_TRUE(fs::exists(ws / "pano4d/expand/colmap/images.txt"));
+  EXPECT_EQ(RunPano4d(expand, ws / "expand3.log"), 1);
+  EXPECT_NE(Slurp(ws / "expand3.log").find("all 2 steps have run"),
+            std::string::npos)
+      << Slurp(ws / "expand3.log");
+
   // --no-expansion: the same fit without it.
   const fs::path plain = Workspace("ws_no_expansion");
   ASSERT_EQ(RunPano4d("fit --workspace '" + plain.string() +
@@ -286,6 +306,12 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
   EXPECT_FALSE(fs::exists(plain / "pano4d/expansion"));
   EXPECT_LT(fit2.at("static_gaussians").get<int>(),
             fit.at("static_gaussians").get<int>());
+  // expand needs a fit first, and says so.
+  const fs::path bare = Workspace("ws_expand_first");
+  EXPECT_EQ(RunPano4d("expand --workspace '" + bare.string() + "'",
+                      bare / "expand.log"),
+            1);
+  EXPECT_NE(Slurp(bare / "expand.log").find("fit.ckpt"), std::string::npos);
 }
 
 }  // namespace

@@ -1,0 +1,133 @@
+// pano4d expand: one panoramic expansion step on its own, from the Gaussians
+// that `pano4d fit` left in its checkpoint: trajectories, warping, the prior,
+// panoramas. Nothing is distilled back (that is what fit does).
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "src/cli/app.h"
+#include "src/cli/expansion_outputs.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/frames.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/gs/trainer.h"
+#include "src/pano/expansion.h"
+
+namespace pano4d::cli {
+namespace fs = std::filesystem;
+namespace {
+
+struct ExpandCommandOptions {
+  fs::path workspace;
+  ExpansionOptions expansion;
+  int step = 0;  // 0: the one after the last in WS/pano4d/expand
+  std::string prior_cmd;
+  int panorama_width = 1024;
+};
+
+int RunExpandCommand(ExpandCommandOptions o) {
+  const fs::path ws = o.workspace;
+  const fs::path ckpt = ws / "pano4d" / "checkpoints" / "fit.ckpt";
+  if (!fs::exists(ckpt)) {
+    throw Error(ckpt.string(), "file", "",
+                "missing: run `pano4d fit --workspace " + ws.string() +
+                    "` first; expand starts from its Gaussians");
+  }
+  const fs::path out = ws / "pano4d" / "expand";
+  const fs::path steps_path = out / "steps.json";
+  nlohmann::json steps =
+      fs::exists(steps_path) ? ReadJson(steps_path) : nlohmann::json::array();
+  int last = 0;
+  for (const auto& s : steps) last = std::max(last, s.at("step").get<int>());
+  const int e = o.step > 0 ? o.step : last + 1;
+  if (e > o.expansion.geometry.steps) {
+    throw Error(steps_path.string(), "step", std::to_string(e),
+                "all " + std::to_string(o.expansion.geometry.steps) +
+                    " steps have run; pass --step N to run one again or "
+                    "--expansion-steps to go further");
+  }
+  o.expansion.Check();
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
+  TrainerOptions trainer_options;
+  trainer_options.iterations = 1;
+  Trainer trainer(ReadCheckpointScene(ckpt), LoadTrainingViews(frames.train),
+                  trainer_options);
+  o.expansion.gaussian_refinement = true;  // placement is reported
+  const std::unique_ptr<Prior> prior = MakePrior(o.prior_cmd, out / "prior");
+  Expansion expansion(o.expansion, out, prior.get());
+  if (e > 1 && fs::exists(expansion.StepDir(e - 1) / "cameras.json")) {
+    expansion.Reload(trainer, e - 1);  // chaining from the step before
+  }
+  const ExpansionStepReport report = expansion.RunStep(&trainer, e);
+  PANO4D_LOG(kInfo) << report.Brief();
+  steps.push_back(report.ToJson());
+  WriteJson(steps_path, steps);
+  std::vector<ExpandedView> cameras;
+  for (const ExpandedView& v : expansion.cameras())
+    if (v.e == e) cameras.push_back(v);
+  WriteTrajectories(out, cameras, trainer.views());
+  WritePanoramas(ws / "pano4d" / "panorama", trainer.scene(), expansion.frame(),
+                 o.panorama_width, o.panorama_width / 2);
+  std::printf(
+      "pano4d expand: step %d (%.1f deg), %d views, holes %.1f%%, prior %s%s\n"
+      "  products   %s\n  cameras    %s (COLMAP model: %s)\n"
+      "  panoramas  %s\n",
+      e, report.angle_degrees, report.views, 100 * report.hole_fraction,
+      report.prior.c_str(),
+      report.fallbacks > 0 ? " (fell back; see the log)" : "",
+      expansion.StepDir(e).c_str(), (out / "trajectories.json").c_str(),
+      (out / "colmap").c_str(), (ws / "pano4d" / "panorama").c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddExpandCommand(CLI::App& app, Action* action) {
+  auto o = std::make_shared<ExpandCommandOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "expand",
+      "Run one panoramic expansion step on the fitted Gaussians: "
+      "trajectories, warping, prior, panoramas (no refinement)");
+  sub->add_option("--workspace", o->workspace,
+                  "The workspace (WS/pano4d/checkpoints/fit.ckpt from "
+                  "`pano4d fit`)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--step", o->step,
+                  "The step e (angle e x alpha); default: the one after the "
+                  "last that ran");
+  sub->add_option("--directions", o->expansion.geometry.directions,
+                  "Expansion directions M")
+      ->capture_default_str();
+  sub->add_option("--expansion-steps", o->expansion.geometry.steps,
+                  "Expansion steps E")
+      ->capture_default_str();
+  sub->add_option("--alpha", o->expansion.geometry.alpha_degrees,
+                  "Angle per step, degrees")
+      ->capture_default_str();
+  sub->add_option("--expansion-stride", o->expansion.time_stride,
+                  "Expand every N-th training frame in time")
+      ->capture_default_str();
+  sub->add_flag("--planar-expansion", o->expansion.geometry.planar,
+                "Translate cameras in the image plane instead of orbiting");
+  sub->add_option("--prior-cmd", o->prior_cmd,
+                  "External video prior, a command with {in} and {out} (see "
+                  "README); the CPU prior without it or when it fails");
+  sub->add_option("--panorama-width", o->panorama_width,
+                  "Width of the panoramas (height half)")
+      ->capture_default_str();
+  sub->footer(
+      "Writes WS/pano4d/expand/step_<e>/dir_<m>/{warped,mask,refined}/ and "
+      "cameras.json, WS/pano4d/expand/trajectories.json and colmap/ (the "
+      "step's cameras beside the training ones), steps.json, and "
+      "WS/pano4d/panorama/.");
+  sub->callback(
+      [action, o] { *action = [o] { return RunExpandCommand(*o); }; });
+}
+
+}  // namespace pano4d::cli
