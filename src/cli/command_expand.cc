@@ -63,6 +63,8 @@ int RunExpandCommand(ExpandCommandOptions o) {
   if (e > 1 && fs::exists(expansion.StepDir(e - 1) / "cameras.json")) {
     expansion.Reload(trainer, e - 1);  // chaining from the step before
   }
+  // The panoramas show the fitted Gaussians, not the step's untrained ones.
+  const GaussianScene fitted = trainer.scene();
   const ExpansionStepReport report = expansion.RunStep(&trainer, e);
   PANO4D_LOG(kInfo) << report.Brief();
   steps.push_back(report.ToJson());
@@ -71,7 +73,7 @@ int RunExpandCommand(ExpandCommandOptions o) {
   for (const ExpandedView& v : expansion.cameras())
     if (v.e == e) cameras.push_back(v);
   WriteTrajectories(out, cameras, trainer.views());
-  WritePanoramas(ws / "pano4d" / "panorama", trainer.scene(), expansion.frame(),
+  WritePanoramas(ws / "pano4d" / "panorama", fitted, expansion.frame(),
                  o.panorama_width, o.panorama_width / 2);
   std::printf(
       "pano4d expand: step %d (%.1f deg), %d views, holes %.1f%%, prior %s%s\n"
@@ -100,7 +102,8 @@ void AddExpandCommand(CLI::App& app, Action* action) {
       ->check(CLI::ExistingDirectory);
   sub->add_option("--step", o->step,
                   "The step e (angle e x alpha); default: the one after the "
-                  "last that ran");
+                  "last that ran")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--directions", o->expansion.geometry.directions,
                   "Expansion directions M")
       ->capture_default_str();
@@ -120,6 +123,7 @@ void AddExpandCommand(CLI::App& app, Action* action) {
                   "README); the CPU prior without it or when it fails");
   sub->add_option("--panorama-width", o->panorama_width,
                   "Width of the panoramas (height half)")
+      ->check(CLI::Range(2, 16384))
       ->capture_default_str();
   sub->footer(
       "Writes WS/pano4d/expand/step_<e>/dir_<m>/{warped,mask,refined}/ and "

@@ -212,7 +212,8 @@ int RunFitCommand(FitCommandOptions o) {
                         << o.expansion.every << " (--expand-every)";
     } else {
       const fs::path options_path = expansion_dir / "options.json";
-      const nlohmann::json options_json = o.expansion.ToJson();
+      nlohmann::json options_json = o.expansion.ToJson();
+      options_json["prior_cmd"] = o.prior_cmd;
       if (resuming && fs::exists(options_path) &&
           ReadJson(options_path) != options_json) {
         throw Error(options_path.string(), "options", "",
@@ -226,9 +227,15 @@ int RunFitCommand(FitCommandOptions o) {
           std::make_unique<Expansion>(o.expansion, expansion_dir, prior.get());
       if (resuming) {
         const fs::path steps_path = expansion_dir / "steps.json";
-        if (fs::exists(steps_path)) expansion_steps = ReadJson(steps_path);
-        expansion->Reload(trainer, LastStepBefore(o.expansion, resumed_at,
-                                                  o.trainer.iterations));
+        const int last =
+            LastStepBefore(o.expansion, resumed_at, o.trainer.iterations);
+        // Steps the interrupted run did after its checkpoint run again.
+        if (fs::exists(steps_path)) {
+          for (const auto& step : ReadJson(steps_path))
+            if (GetJson<int>(step, "step", steps_path.string()) <= last)
+              expansion_steps.push_back(step);
+        }
+        expansion->Reload(trainer, last);
       }
       trainer.extra_view = [e = expansion.get()](std::int64_t it) {
         return e->ViewFor(it);
@@ -557,6 +564,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
       "distilled into the Gaussians");
   sub->add_option("--panorama-width", o->panorama_width,
                   "Width of the panoramas in WS/pano4d/panorama (height half)")
+      ->check(CLI::Range(2, 16384))
       ->capture_default_str();
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "

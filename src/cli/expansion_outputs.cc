@@ -62,7 +62,7 @@ void WriteTrajectories(const std::filesystem::path& dir,
     views.push_back(ToJson(v));
     AddImage(v.camera,
              "step_" + Padded(v.e, 2) + "/dir_" + std::to_string(v.m) + "/" +
-                 Padded(v.t, 5) + ".png",
+                 (v.name.empty() ? Padded(v.t, 5) : v.name) + ".png",
              &model);
   }
   WriteJson(dir / "trajectories.json",

@@ -91,8 +91,7 @@ std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& seen_by,
                                     std::vector<double>* depths) {
   std::vector<std::uint8_t> keep(points->size(), 1);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size());
-       ++i) {
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size()); ++i) {
     const Eigen::Vector3f& x = points->points[i];
     for (const SeenDepth& v : seen_by) {
       const Eigen::Vector3f c = v.camera.rotation * x + v.camera.translation;
@@ -117,8 +116,7 @@ std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& seen_by,
     kept.colors.push_back(points->colors[i]);
     kept_depths.push_back((*depths)[i]);
   }
-  const auto rejected =
-      static_cast<std::int64_t>(points->size() - kept.size());
+  const auto rejected = static_cast<std::int64_t>(points->size() - kept.size());
   *points = std::move(kept);
   *depths = std::move(kept_depths);
   return rejected;
@@ -129,6 +127,16 @@ std::uint64_t SplitMix64(std::uint64_t x) {
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
+}
+
+void CheckSize(const std::filesystem::path& path, int width, int height,
+               const RasterCamera& camera) {
+  if (width != camera.width || height != camera.height) {
+    throw Error(path.string(), "size",
+                std::to_string(width) + "x" + std::to_string(height),
+                "expected " + std::to_string(camera.width) + "x" +
+                    std::to_string(camera.height) + ", the size of its camera");
+  }
 }
 
 }  // namespace
@@ -219,6 +227,13 @@ Expansion::Expansion(ExpansionOptions options, std::filesystem::path out_dir,
   if (!prior_) throw Error("expansion", "prior", "null", "a prior is needed");
 }
 
+void Expansion::NameViews(const Trainer& trainer,
+                          std::vector<ExpandedView>* views) const {
+  const std::size_t ns = sources_.size();
+  for (std::size_t k = 0; k < views->size(); ++k)
+    (*views)[k].name = trainer.views()[sources_[k % ns].view].name;
+}
+
 std::filesystem::path Expansion::StepDir(int e) const {
   return out_dir_ / Name("step_", e, 2);
 }
@@ -242,7 +257,13 @@ void Expansion::Prepare(const Trainer& trainer) {
     sources_.push_back({order[i], v.camera, v.time});
   }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
-  if (std::filesystem::exists(frame_path) && last_step_ > 0) {
+  if (last_step_ > 0) {
+    if (!std::filesystem::exists(frame_path)) {
+      throw Error(frame_path.string(), "file", "",
+                  "missing: the panorama frame of the steps already run is "
+                  "needed to go on from them (for pano4d fit: run again "
+                  "without --resume)");
+    }
     const Json j = ReadJson(frame_path);
     const auto c = GetJson<std::vector<double>>(j, "center", frame_path);
     const auto r = GetJson<std::vector<double>>(j, "r_align", frame_path);
@@ -292,8 +313,9 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
     source_cameras.push_back(s.camera);
     times.push_back(s.time);
   }
-  const std::vector<ExpandedView> cams = ExpansionViews(
+  std::vector<ExpandedView> cams = ExpansionViews(
       options_.geometry, reference_, frame_.center, source_cameras, times, e);
+  NameViews(*trainer, &cams);
 
   // Depth from the current Gaussians at the source cameras, fixed for the
   // whole step.
@@ -368,7 +390,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
           RefinedDepth(clip.depth[s], clip.masks[s],
                        filled.depth.empty() ? cv::Mat() : filled.depth[s]);
       current[m * ns + s] = {v.camera, refined, refined_depth};
-      const std::string id = Name("", v.t, 5);
+      const std::string& id = v.name;
       WriteImage(dm / "warped" / (id + ".png"),
                  Image::FromRgb32f(clip.frames[s].clone()));
       WriteMask(dm / "mask" / (id + ".png"), original_masks[s]);
@@ -407,12 +429,6 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   WriteJson(dir / "cameras.json", {{"step", e},
                                    {"angle_degrees", report.angle_degrees},
                                    {"views", cameras_json}});
-  // Chaining needs only the last step's depth.
-  if (last_step_ > 0 && last_step_ != e) {
-    for (int m = 0; m < directions; ++m)
-      std::filesystem::remove_all(StepDir(last_step_) / Name("dir_", m, 1) /
-                                  "depth");
-  }
   previous_ = std::move(current);
   last_step_ = e;
   report.views = static_cast<int>(cams.size());
@@ -473,9 +489,10 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
       throw Error(cameras_path.string(), "file", "",
                   "missing: the expansion products of step " +
                       std::to_string(e) +
-                      " are needed to resume; run again without --resume");
+                      " are needed to go on from it (for pano4d fit: run "
+                      "again without --resume)");
     }
-    const std::vector<ExpandedView> cams = ExpansionViews(
+    std::vector<ExpandedView> cams = ExpansionViews(
         options_.geometry, reference_, frame_.center,
         [&] {
           std::vector<RasterCamera> c;
@@ -488,20 +505,39 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
           return t;
         }(),
         e);
+    NameViews(trainer, &cams);
     for (std::size_t k = 0; k < cams.size(); ++k) {
       const ExpandedView& v = cams[k];
       const std::filesystem::path dm = StepDir(e) / Name("dir_", v.m, 1);
-      const std::string id = Name("", v.t, 5);
-      const cv::Mat refined = ReadImage(dm / "refined" / (id + ".png")).mat();
+      const std::string& id = v.name;
+      const std::filesystem::path refined_path = dm / "refined" / (id + ".png");
+      const cv::Mat refined = ReadImage(refined_path).mat();
+      CheckSize(refined_path, refined.cols, refined.rows, v.camera);
       if (options_.gaussian_refinement) {
-        StoredView stored{v.camera, v.t, cv::Mat(),
-                          ReadMask(dm / "mask" / (id + ".png")) / 255};
+        const std::filesystem::path mask_path = dm / "mask" / (id + ".png");
+        const cv::Mat mask = ReadMask(mask_path);
+        CheckSize(mask_path, mask.cols, mask.rows, v.camera);
+        StoredView stored{v.camera, v.t, cv::Mat(), mask / 255};
         refined.convertTo(stored.target, CV_8UC3, 255.0);
         views_.push_back(std::move(stored));
       }
       if (e == last_step) {
-        const std::vector<float> d =
-            ReadNpy(dm / "depth" / (id + ".npy")).ToFloats();
+        const std::filesystem::path depth_path = dm / "depth" / (id + ".npy");
+        const NpyArray array = ReadNpy(depth_path);
+        const std::vector<float> d = array.ToFloats();
+        if (array.shape.size() != 2 || array.shape[0] != v.camera.height ||
+            array.shape[1] != v.camera.width) {
+          throw Error(depth_path.string(), "shape", "",
+                      "expected " + std::to_string(v.camera.height) + " x " +
+                          std::to_string(v.camera.width) +
+                          ", the size of its camera");
+        }
+        for (float z : d) {
+          if (!std::isfinite(z)) {
+            throw Error(depth_path.string(), "depth", std::to_string(z),
+                        "not finite");
+          }
+        }
         cv::Mat depth(v.camera.height, v.camera.width, CV_32FC1);
         std::copy(d.begin(), d.end(), depth.begin<float>());
         previous_[k] = {v.camera, refined.clone(), depth};

@@ -69,7 +69,7 @@ struct ExpansionStepReport {
 // Runs expansion steps on a Trainer's current Gaussians and serves the
 // refinement views to its extra_view hook. Products go under `out_dir`
 // (WS/pano4d/expansion): frame.json, step_<e>/dir_<m>/{warped,mask,refined}
-// PNGs and cameras.json per step.
+// PNGs and depth .npy named after the source frame, cameras.json per step.
 class Expansion {
  public:
   Expansion(ExpansionOptions options, std::filesystem::path out_dir,
@@ -114,6 +114,9 @@ class Expansion {
     cv::Mat depth;  // CV_32FC1
   };
   void Prepare(const Trainer& trainer);
+  // Each view named after its source frame (views in ExpansionViews' order).
+  void NameViews(const Trainer& trainer,
+                 std::vector<ExpandedView>* views) const;
 
   ExpansionOptions options_;
   std::filesystem::path out_dir_;

@@ -142,6 +142,7 @@ nlohmann::json ToJson(const ExpandedView& view) {
   return {{"m", view.m},
           {"e", view.e},
           {"t", view.t},
+          {"source", view.name},
           {"camera", CameraToJson(view.camera)}};
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -53,6 +54,7 @@ RasterCamera PlanarCamera(const RasterCamera& source,
 struct ExpandedView {
   int m = 0, e = 0, t = 0;
   RasterCamera camera;
+  std::string name;  // the source frame's, when known (file names)
 };
 
 // The views of step e (1..E) for every direction and the given source

@@ -109,7 +109,7 @@ TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   EXPECT_EQ(r1.prior, "geometry");
   for (const char* kind : {"warped", "mask", "refined"})
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_1" /
-                                        kind / "00003.png"))
+                                        kind / "f3.png"))
         << kind;
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "cameras.json"));
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "frame.json"));
@@ -177,7 +177,7 @@ TEST(ExpansionTest, WithoutGaussianRefinementNothingIsDistilled) {
   EXPECT_EQ(trainer->scene().statics.size(), before);
   EXPECT_EQ(expansion.ViewFor(3), nullptr);
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_0" /
-                                      "refined" / "00000.png"));
+                                      "refined" / "f0.png"));
 }
 
 TEST(ExpansionTest, OptionsAreChecked) {

@@ -78,7 +78,9 @@ TEST(TrajectoryTest, StepETurnsTheViewByEAlphaTowardsDm) {
       const Eigen::Vector3d s = ExpandedDirection(n, a, angle);
       EXPECT_NEAR(s.norm(), 1.0, 1e-9);
       EXPECT_NEAR(Angle(s, n), angle, 1e-9) << "m " << m << " e " << e;
-      if (e > 0) EXPECT_GT(s.dot(d), 0);  // turns towards d_m
+      if (e > 0) {
+        EXPECT_GT(s.dot(d), 0);  // turns towards d_m
+      }
       // The orbited camera looks along s, keeps its distance to the centre,
       // and sees the centre at the same pixel.
       const RasterCamera c = OrbitCamera(ref, center, a, angle);
