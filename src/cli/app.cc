@@ -30,7 +30,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
     {"run",
      "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
-    {"make-pairs", "Panoramic-trajectory training pairs for a video prior"},
 };
 
 }  // namespace
@@ -83,6 +82,7 @@ int Main(int argc, char** argv) {
   AddDepthCommand(app, &action);
   AddFitCommand(app, &action);
   AddExpandCommand(app, &action);
+  AddMakePairsCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

@@ -41,5 +41,6 @@ void AddSfmCommand(CLI::App& app, Action* action);
 void AddDepthCommand(CLI::App& app, Action* action);
 void AddFitCommand(CLI::App& app, Action* action);
 void AddExpandCommand(CLI::App& app, Action* action);
+void AddMakePairsCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

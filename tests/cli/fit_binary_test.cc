@@ -240,6 +240,35 @@ TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
               ReadFileBytes(ckpt));
 }
 
+// Training pairs for a video prior from a workspace's frames and depth.
+TEST_F(FitBinaryTest, MakePairsWritesClipsOfCovisibleVideoMasksAndSource) {
+  const fs::path ws = Workspace("ws_pairs");
+  const fs::path out = ws / "pairs";
+  ASSERT_EQ(RunPano4d("make-pairs --workspace '" + ws.string() + "' --out '" +
+                          out.string() + "' --clips 2 --frames 6 --seed 4",
+                      ws / "pairs.log"),
+            0)
+      << Slurp(ws / "pairs.log");
+  for (const char* clip : {"clip_00000", "clip_00001"}) {
+    for (const char* kind : {"cov", "mask", "src"}) {
+      int files = 0;
+      for (const auto& e : fs::directory_iterator(out / clip / kind))
+        files += e.path().extension() == ".png";
+      EXPECT_EQ(files, 6) << clip << " " << kind;
+    }
+    const nlohmann::json meta =
+        nlohmann::json::parse(Slurp(out / clip / "meta.json"));
+    ASSERT_EQ(meta.at("frames").size(), 6u);
+    EXPECT_DOUBLE_EQ(meta["frames"][0].at("angle_degrees").get<double>(), 0);
+    EXPECT_NEAR(meta["frames"][5].at("angle_degrees").get<double>(), 30, 1e-9);
+  }
+  const nlohmann::json report =
+      nlohmann::json::parse(Slurp(out / "pairs.json"));
+  // The first frame of each clip has not moved; later ones lose something.
+  EXPECT_GT(report.at("mask_fraction").get<double>(), 0.01);
+  EXPECT_LT(report.at("mask_fraction").get<double>(), 0.9);
+}
+
 // Expansion products where users and viewers look for them, and a video
 // prior that fails: the CPU prior fills in, the log says why, the fit ends.
 TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
