@@ -104,27 +104,7 @@ void AddExpandCommand(CLI::App& app, Action* action) {
                   "The step e (angle e x alpha); default: the one after the "
                   "last that ran")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--directions", o->expansion.geometry.directions,
-                  "Expansion directions M")
-      ->capture_default_str();
-  sub->add_option("--expansion-steps", o->expansion.geometry.steps,
-                  "Expansion steps E")
-      ->capture_default_str();
-  sub->add_option("--alpha", o->expansion.geometry.alpha_degrees,
-                  "Angle per step, degrees")
-      ->capture_default_str();
-  sub->add_option("--expansion-stride", o->expansion.time_stride,
-                  "Expand every N-th training frame in time")
-      ->capture_default_str();
-  sub->add_flag("--planar-expansion", o->expansion.geometry.planar,
-                "Translate cameras in the image plane instead of orbiting");
-  sub->add_option("--prior-cmd", o->prior_cmd,
-                  "External video prior, a command with {in} and {out} (see "
-                  "README); the CPU prior without it or when it fails");
-  sub->add_option("--panorama-width", o->panorama_width,
-                  "Width of the panoramas (height half)")
-      ->check(CLI::Range(2, 16384))
-      ->capture_default_str();
+  AddExpansionFlags(sub, &o->expansion, &o->prior_cmd, &o->panorama_width);
   sub->footer(
       "Writes WS/pano4d/expand/step_<e>/dir_<m>/{warped,mask,refined}/ and "
       "cameras.json, WS/pano4d/expand/trajectories.json and colmap/ (the "

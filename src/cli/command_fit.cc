@@ -528,32 +528,13 @@ void AddFitCommand(CLI::App& app, Action* action) {
                   "An expansion every N iterations; the steps are spread "
                   "over them")
       ->capture_default_str();
-  sub->add_option("--directions", o->expansion.geometry.directions,
-                  "Expansion directions M")
-      ->capture_default_str();
-  sub->add_option("--expansion-steps", o->expansion.geometry.steps,
-                  "Expansion steps E")
-      ->capture_default_str();
-  sub->add_option("--alpha", o->expansion.geometry.alpha_degrees,
-                  "Angle per expansion step, degrees")
-      ->capture_default_str();
   sub->add_option("--refine-weight", o->expansion.refine_weight,
                   "Weight of L_refine on the expanded views")
       ->capture_default_str();
   sub->add_option("--refine-every", o->expansion.refine_every,
                   "L_refine on one expanded view every N iterations")
       ->capture_default_str();
-  sub->add_option("--expansion-stride", o->expansion.time_stride,
-                  "Expand every N-th training frame in time")
-      ->capture_default_str();
-  sub->add_option("--prior-cmd", o->prior_cmd,
-                  "External video prior: a command with {in} and {out} "
-                  "(folders; see README). Without it, the CPU geometry prior. "
-                  "When the command fails, the CPU prior fills in and the log "
-                  "says why");
-  sub->add_flag("--planar-expansion", o->expansion.geometry.planar,
-                "Ablation: translate cameras in the image plane instead of "
-                "orbiting them on the panorama");
+  AddExpansionFlags(sub, &o->expansion, &o->prior_cmd, &o->panorama_width);
   sub->add_flag("--one-step-expansion", o->expansion.one_step,
                 "Ablation: no progressive expansion, one step at the full "
                 "angle E x alpha");
@@ -562,10 +543,6 @@ void AddFitCommand(CLI::App& app, Action* action) {
       [o](std::int64_t) { o->expansion.gaussian_refinement = false; },
       "Ablation: expanded views are made and written but not "
       "distilled into the Gaussians");
-  sub->add_option("--panorama-width", o->panorama_width,
-                  "Width of the panoramas in WS/pano4d/panorama (height half)")
-      ->check(CLI::Range(2, 16384))
-      ->capture_default_str();
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "
       "WS/pano4d/metrics/fit.csv and fit.png (error against run time), and "

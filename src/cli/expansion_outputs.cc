@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <string>
 
+#include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
@@ -43,6 +44,33 @@ void AddImage(const RasterCamera& c, const std::string& name,
 }
 
 }  // namespace
+
+void AddExpansionFlags(CLI::App* sub, ExpansionOptions* o,
+                       std::string* prior_cmd, int* panorama_width) {
+  sub->add_option("--directions", o->geometry.directions,
+                  "Expansion directions M")
+      ->capture_default_str();
+  sub->add_option("--expansion-steps", o->geometry.steps, "Expansion steps E")
+      ->capture_default_str();
+  sub->add_option("--alpha", o->geometry.alpha_degrees,
+                  "Angle per expansion step, degrees")
+      ->capture_default_str();
+  sub->add_option("--expansion-stride", o->time_stride,
+                  "Expand every N-th training frame in time")
+      ->capture_default_str();
+  sub->add_flag("--planar-expansion", o->geometry.planar,
+                "Ablation: translate cameras in the image plane instead of "
+                "orbiting them on the panorama");
+  sub->add_option("--prior-cmd", *prior_cmd,
+                  "External video prior: a command with {in} and {out} "
+                  "(folders; see README). Without it, the CPU geometry prior. "
+                  "When the command fails, the CPU prior fills in and the log "
+                  "says why");
+  sub->add_option("--panorama-width", *panorama_width,
+                  "Width of the panoramas in WS/pano4d/panorama (height half)")
+      ->check(CLI::Range(2, 16384))
+      ->capture_default_str();
+}
 
 std::unique_ptr<Prior> MakePrior(const std::string& command,
                                  const std::filesystem::path& work_dir) {

@@ -1,6 +1,7 @@
 #pragma once
-// What the expansion leaves in the workspace for people and viewers:
-// trajectories as JSON and as a COLMAP model, and equirectangular panoramas.
+// What `pano4d fit` and `pano4d expand` share about the expansion: its flags,
+// its prior, and what it leaves in the workspace for people and viewers
+// (trajectories as JSON and as a COLMAP model, equirectangular panoramas).
 
 #include <filesystem>
 #include <memory>
@@ -9,11 +10,21 @@
 
 #include "src/gs/scene.h"
 #include "src/gs/trainer.h"
+#include "src/pano/expansion.h"
 #include "src/pano/frame.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory.h"
 
+namespace CLI {
+class App;
+}
+
 namespace pano4d::cli {
+
+// The flags both commands take: --directions, --expansion-steps, --alpha,
+// --expansion-stride, --planar-expansion, --prior-cmd, --panorama-width.
+void AddExpansionFlags(CLI::App* sub, ExpansionOptions* options,
+                       std::string* prior_cmd, int* panorama_width);
 
 // The prior the expansion fills holes with: the external command when given
 // (its folders under work_dir), falling back to the CPU geometry prior when

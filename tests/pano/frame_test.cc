@@ -7,27 +7,12 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "tests/pano/look_at.h"
 
 namespace pano4d {
 namespace {
 
-// A camera at `eye` looking at `target`, world +z up (OpenCV axes: y down).
-RasterCamera LookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target) {
-  const Eigen::Vector3f forward = (target - eye).normalized();
-  const Eigen::Vector3f right =
-      forward.cross(Eigen::Vector3f::UnitZ()).normalized();
-  Eigen::Matrix3f world_from_cam;
-  world_from_cam << right, forward.cross(right), forward;
-  RasterCamera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50;
-  c.cx = 32;
-  c.cy = 24;
-  c.rotation = world_from_cam.transpose();
-  c.translation = -(c.rotation * eye);
-  return c;
-}
+using testing::LookAt;
 
 TEST(PanoramaFrameTest, CentreIsTheCentroidAndTheFirstViewMapsToTheMiddle) {
   const std::vector<Eigen::Vector3f> points = {

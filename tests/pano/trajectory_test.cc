@@ -8,28 +8,14 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "tests/pano/look_at.h"
 
 namespace pano4d {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-RasterCamera LookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target) {
-  const Eigen::Vector3f forward = (target - eye).normalized();
-  const Eigen::Vector3f right =
-      forward.cross(Eigen::Vector3f::UnitZ()).normalized();
-  Eigen::Matrix3f world_from_cam;
-  world_from_cam << right, forward.cross(right), forward;
-  RasterCamera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50;
-  c.cx = 32;
-  c.cy = 24;
-  c.rotation = world_from_cam.transpose();
-  c.translation = -(c.rotation * eye);
-  return c;
-}
+using testing::LookAt;
 
 double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
