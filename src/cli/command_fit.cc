@@ -139,6 +139,52 @@ QuickMetrics Validate(Trainer* trainer,
   return q;
 }
 
+// --no-gaussian-refinement: the validation views made from the panoramic
+// representation (Expansion::PanoramicViews), one trajectory per validation
+// camera (frames sharing a pose), written as renders/val/<frame>.png.
+void WritePanoramaResults(Trainer* trainer, Expansion* expansion,
+                          const std::vector<ValidationView>& val,
+                          const fs::path& renders) {
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < val.size(); ++i) {
+    const RasterCamera& c = val[i].camera;
+    auto same_pose = [&](const std::vector<std::size_t>& g) {
+      const RasterCamera& d = val[g.front()].camera;
+      return c.rotation == d.rotation && c.translation == d.translation;
+    };
+    auto g = std::find_if(groups.begin(), groups.end(), same_pose);
+    if (g == groups.end()) {
+      groups.push_back({i});
+    } else {
+      g->push_back(i);
+    }
+  }
+  ProgressBar bar("panorama results", static_cast<std::int64_t>(val.size()));
+  for (std::vector<std::size_t>& g : groups) {
+    std::stable_sort(g.begin(), g.end(), [&](std::size_t a, std::size_t b) {
+      return val[a].time < val[b].time;
+    });
+    std::vector<RasterCamera> cameras;
+    std::vector<int> times;
+    for (std::size_t i : g) {
+      cameras.push_back(val[i].camera);
+      times.push_back(val[i].time);
+    }
+    std::string note;
+    const std::vector<cv::Mat> views = expansion->PanoramicViews(
+        trainer, "val_" + val[g.front()].name, cameras, times, &note);
+    if (!note.empty()) {
+      PANO4D_LOG(kWarning) << "panorama results: " << note;
+    }
+    for (std::size_t k = 0; k < g.size(); ++k) {
+      WriteImage(renders / (val[g[k]].name + ".png"),
+                 Image::FromRgb32f(views[k].clone()));
+    }
+    bar.Add(static_cast<std::int64_t>(g.size()));
+  }
+  bar.Finish();
+}
+
 std::string Format(const std::optional<double>& v, const char* unit = "") {
   if (!v) return "n/a";
   char buffer[32];
@@ -332,7 +378,10 @@ int RunFitCommand(FitCommandOptions o) {
     train_psnr /= static_cast<double>(train_views.size());
   }
 
-  // Validation renders, scored with `pano4d eval`'s code.
+  // Validation renders, scored with `pano4d eval`'s code. The ablation
+  // without Gaussian refinement scores the panorama results instead.
+  const bool panorama_only = expansion && !o.expansion.gaussian_refinement &&
+                             !expansion->cameras().empty();
   nlohmann::json metrics_json;
   std::optional<EvaluationResult> evaluation;
   if (!val.empty()) {
@@ -341,10 +390,12 @@ int RunFitCommand(FitCommandOptions o) {
     RenderOutput out;
     for (const ValidationView& v : val) {
       trainer.Render(v.camera, v.time, &out);
-      WriteImage(renders / (v.name + ".png"), ToImage(out));
       WriteNpy(depth_renders / (v.name + ".npy"),
                NpyArray::FromFloats({out.height, out.width}, out.depth));
+      if (!panorama_only) WriteImage(renders / (v.name + ".png"), ToImage(out));
     }
+    if (panorama_only)
+      WritePanoramaResults(&trainer, expansion.get(), val, renders);
     Dataset dataset;
     dataset.root = frames.dataset.empty() ? ws : frames.dataset;
     dataset.factor = frames.dataset_factor > 0 ? frames.dataset_factor : 1;
@@ -434,9 +485,10 @@ int RunFitCommand(FitCommandOptions o) {
       "time", seconds, init_seconds, t.forward, t.loss, t.backward, t.motion,
       t.optimise, t.densify, t.compose, validation_seconds);
   if (expansion) {
-    std::printf("  %-22s %zu steps, %.1f s, %zu refinement views\n",
+    std::printf("  %-22s %zu steps, %.1f s, %zu refinement views%s\n",
                 "expansion", expansion_steps.size(), expansion_seconds,
-                expansion->refinement_views());
+                expansion->refinement_views(),
+                panorama_only ? " (validation: the panorama results)" : "");
   } else {
     std::printf("  %-22s none (%s)\n", "expansion",
                 o.no_expansion ? "--no-expansion" : "run too short");
@@ -541,8 +593,10 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_flag(
       "--no-gaussian-refinement",
       [o](std::int64_t) { o->expansion.gaussian_refinement = false; },
-      "Ablation: expanded views are made and written but not "
-      "distilled into the Gaussians");
+      "Ablation (panorama results only): expanded views are made and "
+      "written but not distilled into the Gaussians, which serve as geometry; "
+      "the validation views are warped from the training frames and the "
+      "refined expanded views, the rest filled by the prior");
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary), "
       "WS/pano4d/metrics/fit.csv and fit.png (error against run time), and "

@@ -139,6 +139,37 @@ void CheckSize(const std::filesystem::path& path, int width, int height,
   }
 }
 
+// A refined frame's depth as RunStep wrote it, checked against its camera.
+cv::Mat ReadDepth(const std::filesystem::path& path,
+                  const RasterCamera& camera) {
+  const NpyArray array = ReadNpy(path);
+  if (array.shape.size() != 2 || array.shape[0] != camera.height ||
+      array.shape[1] != camera.width) {
+    throw Error(path.string(), "shape", "",
+                "expected " + std::to_string(camera.height) + " x " +
+                    std::to_string(camera.width) + ", the size of its camera");
+  }
+  const std::vector<float> d = array.ToFloats();
+  for (float z : d)
+    if (!std::isfinite(z))
+      throw Error(path.string(), "depth", std::to_string(z), "not finite");
+  cv::Mat depth(camera.height, camera.width, CV_32FC1);
+  std::copy(d.begin(), d.end(), depth.begin<float>());
+  return depth;
+}
+
+// z-depth rendered from the trainer's Gaussians where they are opaque
+// enough to trust (kWarpAlpha), 0 elsewhere.
+cv::Mat RenderedDepth(Trainer* trainer, const RasterCamera& camera, int time,
+                      RenderOutput* out) {
+  trainer->Render(camera, time, out);
+  cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(0));
+  for (std::size_t p = 0; p < out->depth.size(); ++p)
+    if (out->alpha[p] >= kWarpAlpha)
+      depth.at<float>(static_cast<int>(p)) = out->depth[p];
+  return depth;
+}
+
 }  // namespace
 
 void ExpansionOptions::Check() const {
@@ -326,12 +357,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
     const TrainingView& v = views[sources_[s].view];
     rgb[s] = cv::Mat(v.camera.height, v.camera.width, CV_32FC3,
                      const_cast<float*>(v.rgb.data()));
-    trainer->Render(v.camera, v.time, &out);
-    depth[s] =
-        cv::Mat(v.camera.height, v.camera.width, CV_32FC1, cv::Scalar(0));
-    for (std::size_t p = 0; p < out.depth.size(); ++p)
-      if (out.alpha[p] >= kWarpAlpha)
-        depth[s].at<float>(static_cast<int>(p)) = out.depth[p];
+    depth[s] = RenderedDepth(trainer, v.camera, v.time, &out);
   }
 
   const bool chain = last_step_ == e - 1 && !previous_.empty();
@@ -522,29 +548,91 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
         views_.push_back(std::move(stored));
       }
       if (e == last_step) {
-        const std::filesystem::path depth_path = dm / "depth" / (id + ".npy");
-        const NpyArray array = ReadNpy(depth_path);
-        const std::vector<float> d = array.ToFloats();
-        if (array.shape.size() != 2 || array.shape[0] != v.camera.height ||
-            array.shape[1] != v.camera.width) {
-          throw Error(depth_path.string(), "shape", "",
-                      "expected " + std::to_string(v.camera.height) + " x " +
-                          std::to_string(v.camera.width) +
-                          ", the size of its camera");
-        }
-        for (float z : d) {
-          if (!std::isfinite(z)) {
-            throw Error(depth_path.string(), "depth", std::to_string(z),
-                        "not finite");
-          }
-        }
-        cv::Mat depth(v.camera.height, v.camera.width, CV_32FC1);
-        std::copy(d.begin(), d.end(), depth.begin<float>());
+        const cv::Mat depth = ReadDepth(dm / "depth" / (id + ".npy"), v.camera);
         previous_[k] = {v.camera, refined.clone(), depth};
       }
     }
     all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
   }
+}
+
+std::vector<cv::Mat> Expansion::PanoramicViews(
+    Trainer* trainer, const std::string& name,
+    const std::vector<RasterCamera>& cameras, const std::vector<int>& times,
+    std::string* note) {
+  if (last_step_ == 0 || all_cameras_.empty()) {
+    throw Error("expansion", "steps", "0",
+                "no expansion step has run: there is no panoramic "
+                "representation to render");
+  }
+  if (cameras.size() != times.size()) {
+    throw Error(
+        "panoramic views", "times", std::to_string(times.size()),
+        "expected one per camera (" + std::to_string(cameras.size()) + ")");
+  }
+  const std::vector<TrainingView>& views = trainer->views();
+  const auto nearest = [](const auto& items, int time, auto time_of) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < items.size(); ++i)
+      if (std::abs(time_of(items[i]) - time) <
+          std::abs(time_of(items[best]) - time))
+        best = i;
+    return best;
+  };
+  // The refined frames of one source over every step, loaded when a target
+  // first needs them (targets of one trajectory mostly share a source).
+  struct Loaded {
+    RasterCamera camera;
+    cv::Mat rgb, depth;
+  };
+  std::size_t loaded_source = sources_.size();
+  std::vector<Loaded> loaded;
+  RenderOutput out;
+  PriorClip clip;
+  clip.name = name;
+  for (std::size_t k = 0; k < cameras.size(); ++k) {
+    const RasterCamera& target = cameras[k];
+    const TrainingView& v = views[nearest(
+        views, times[k], [](const TrainingView& t) { return t.time; })];
+    const cv::Mat rgb(v.camera.height, v.camera.width, CV_32FC3,
+                      const_cast<float*>(v.rgb.data()));
+    WarpResult w = ForwardWarp(
+        rgb, RenderedDepth(trainer, v.camera, v.time, &out), v.camera, target);
+    const std::size_t s =
+        nearest(sources_, times[k], [](const Source& x) { return x.time; });
+    if (s != loaded_source) {
+      loaded.clear();
+      const std::string& id = views[sources_[s].view].name;
+      for (const ExpandedView& c : all_cameras_) {
+        if (c.name != id) continue;
+        const std::filesystem::path dm = StepDir(c.e) / Name("dir_", c.m, 1);
+        const std::filesystem::path refined_path =
+            dm / "refined" / (id + ".png");
+        const cv::Mat refined = ReadImage(refined_path).mat();
+        CheckSize(refined_path, refined.cols, refined.rows, c.camera);
+        loaded.push_back({c.camera, refined.clone(),
+                          ReadDepth(dm / "depth" / (id + ".npy"), c.camera)});
+      }
+      loaded_source = s;
+    }
+    for (const Loaded& l : loaded) {
+      if (cv::countNonZero(w.mask) == 0) break;
+      FillHoles(ForwardWarp(l.rgb, l.depth, l.camera, target), &w);
+    }
+    clip.frames.push_back(w.rgb);
+    clip.masks.push_back(w.mask);
+    clip.depth.push_back(w.depth);
+    clip.cameras.push_back(target);
+    clip.times.push_back(times[k]);
+    clip.references.push_back(rgb.clone());
+    clip.reference_cameras.push_back(v.camera);
+  }
+  const PriorResult filled = prior_->Fill(clip);
+  if (note) *note = filled.note;
+  std::vector<cv::Mat> result(cameras.size());
+  for (std::size_t k = 0; k < cameras.size(); ++k)
+    result[k] = Composite(clip.frames[k], filled.frames[k], clip.masks[k]);
+  return result;
 }
 
 }  // namespace pano4d

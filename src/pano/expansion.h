@@ -90,6 +90,23 @@ class Expansion {
   // After --resume: the refinement views of steps 1..last_step as written.
   void Reload(const Trainer& trainer, int last_step);
 
+  // The ablation without Gaussian refinement (the panorama results alone):
+  // views at `cameras` (one trajectory, frame k at times[k]) made from the
+  // panoramic representation, with the Gaussians used for geometry only.
+  // Per target: the training frame nearest in time, with depth rendered
+  // from the Gaussians (the geometry every warp uses), then the refined
+  // frames of every step run (read back from StepDir) at the expansion
+  // source nearest in time, each forward-warped into the target and filling
+  // only what is still a hole, steps in order; what none of them reaches is
+  // filled by the prior, the targets as one clip (`name`: its name in
+  // messages and the prior's folders). CV_32FC3 RGB per target;
+  // `note` gets the prior's note (a fallback's reason), if any. Throws
+  // pano4d::Error when no step has run or a product is missing.
+  std::vector<cv::Mat> PanoramicViews(Trainer* trainer, const std::string& name,
+                                      const std::vector<RasterCamera>& cameras,
+                                      const std::vector<int>& times,
+                                      std::string* note = nullptr);
+
   const std::vector<ExpandedView>& cameras() const { return all_cameras_; }
   const PanoramaFrame& frame() const { return frame_; }
   // Where step e's products go: out_dir/step_<e, two digits>.

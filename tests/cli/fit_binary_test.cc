@@ -339,6 +339,33 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
   EXPECT_FALSE(fs::exists(plain / "pano4d/expansion"));
   EXPECT_LT(fit2.at("static_gaussians").get<int>(),
             fit.at("static_gaussians").get<int>());
+  // --no-gaussian-refinement: the Gaussians fit as without expansion, and
+  // validation scores the panorama results instead of their renders.
+  const fs::path panorama = Workspace("ws_panorama_only");
+  ASSERT_EQ(RunPano4d("fit --workspace '" + panorama.string() +
+                          "' --iterations 60 --expand-every 20 "
+                          "--expansion-steps 2 --directions 2 "
+                          "--expansion-stride 4 --panorama-width 64 "
+                          "--no-gaussian-refinement",
+                      panorama / "fit.log"),
+            0)
+      << Slurp(panorama / "fit.log");
+  EXPECT_NE(Slurp(panorama / "fit.log").find("the panorama results"),
+            std::string::npos);
+  const nlohmann::json fit3 =
+      nlohmann::json::parse(Slurp(panorama / "pano4d/fit.json"));
+  EXPECT_EQ(fit3.at("static_gaussians"), fit2.at("static_gaussians"));
+  EXPECT_EQ(fit3.at("expansion").at("steps").size(), 2u);
+  int differ = 0, renders = 0;
+  for (const auto& f : fs::directory_iterator(plain / "pano4d/renders/val")) {
+    ++renders;
+    differ += Slurp(f.path()) !=
+              Slurp(panorama / "pano4d/renders/val" / f.path().filename());
+  }
+  EXPECT_EQ(renders, 16);
+  EXPECT_EQ(differ, renders);
+  EXPECT_TRUE(fit3.at("metrics").at("upsnr").is_number());
+
   // expand needs a fit first, and says so.
   const fs::path bare = Workspace("ws_expand_first");
   EXPECT_EQ(RunPano4d("expand --workspace '" + bare.string() + "'",

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/core/image.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 #include "tests/support/test_files.h"
@@ -178,6 +179,96 @@ TEST(ExpansionTest, WithoutGaussianRefinementNothingIsDistilled) {
   EXPECT_EQ(expansion.ViewFor(3), nullptr);
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_0" /
                                       "refined" / "f0.png"));
+}
+
+// Fills every masked pixel with one colour (which the test may change).
+class ConstantPrior : public Prior {
+ public:
+  cv::Vec3f colour{1, 0, 1};
+  std::string name() const override { return "constant"; }
+  PriorResult Fill(const PriorClip& clip) override {
+    PriorResult r;
+    r.prior = name();
+    for (const cv::Mat& f : clip.frames) {
+      cv::Mat filled = f.clone();
+      filled.setTo(cv::Scalar(colour[0], colour[1], colour[2]),
+                   clip.masks[r.frames.size()]);
+      r.frames.push_back(filled);
+    }
+    return r;
+  }
+};
+
+double MeanAbsDifference(const cv::Mat& a, const cv::Mat& b) {
+  const cv::Scalar d = cv::mean(cv::abs(a - b));
+  return (d[0] + d[1] + d[2]) / 3;
+}
+
+TEST(ExpansionTest, PanoramaResultsComeFromTheFramesAndTheRefinedViews) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer();
+  ConstantPrior prior;  // the steps fill magenta
+  ExpansionOptions o = SmallOptions();
+  o.gaussian_refinement = false;
+  Expansion expansion(o, dir.path(), &prior);
+  EXPECT_THROW(
+      expansion.PanoramicViews(trainer.get(), "early", {CameraAt(0)}, {0}),
+      Error);
+  expansion.RunStep(trainer.get(), 1);
+  expansion.RunStep(trainer.get(), 2);
+  prior.colour = cv::Vec3f(0, 1, 0);  // the panorama results fill green
+
+  // Targets: a training camera, step 2's camera for f1 in direction 0, and
+  // a camera looking away from everything the video saw.
+  const TrainingView& f2 = trainer->views()[2];
+  const ExpandedView* expanded = nullptr;
+  for (const ExpandedView& v : expansion.cameras())
+    if (v.e == 2 && v.m == 0 && v.name == "f1") expanded = &v;
+  ASSERT_NE(expanded, nullptr);
+  RasterCamera away = CameraAt(0.1f);
+  away.rotation =
+      Eigen::AngleAxisf(static_cast<float>(M_PI), Eigen::Vector3f::UnitY())
+          .toRotationMatrix();
+  std::string note = "unset";
+  const std::vector<cv::Mat> views = expansion.PanoramicViews(
+      trainer.get(), "test", {f2.camera, expanded->camera, away}, {2, 1, 1},
+      &note);
+  ASSERT_EQ(views.size(), 3u);
+  EXPECT_EQ(note, "");
+  const cv::Mat frame(kHeight, kWidth, CV_32FC3,
+                      const_cast<float*>(f2.rgb.data()));
+  // A training camera gets its frame back wherever the Gaussians give depth.
+  RenderOutput out;
+  trainer->Render(f2.camera, 2, &out);
+  int same = 0, opaque = 0;
+  for (int p = 0; p < kWidth * kHeight; ++p) {
+    if (out.alpha[p] < 0.5f) continue;
+    ++opaque;
+    same += cv::norm(views[0].at<cv::Vec3f>(p) - frame.at<cv::Vec3f>(p)) < 1e-3;
+  }
+  EXPECT_GT(opaque, kWidth * kHeight / 2);
+  EXPECT_GT(same, opaque * 95 / 100) << same << " of " << opaque;
+
+  // Step 2's camera: what the frame did not reach comes from the refined
+  // views (magenta), not from the prior now (green).
+  const cv::Mat mask =
+      ReadMask(dir.path() / "step_02" / "dir_0" / "mask" / "f1.png");
+  ASSERT_GT(cv::countNonZero(mask), 0);
+  int magenta = 0, green = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      const cv::Vec3f c = views[1].at<cv::Vec3f>(y, x);
+      if (!mask.at<std::uint8_t>(y, x)) continue;
+      magenta += c == cv::Vec3f(1, 0, 1);
+      green += c == cv::Vec3f(0, 1, 0);
+    }
+  }
+  EXPECT_GT(magenta, cv::countNonZero(mask) / 2);
+  EXPECT_EQ(green, 0);
+  // Looking away from everything seen: the prior fills all of it.
+  EXPECT_LT(MeanAbsDifference(views[2], cv::Mat(kHeight, kWidth, CV_32FC3,
+                                                cv::Scalar(0, 1, 0))),
+            1e-6);
 }
 
 TEST(ExpansionTest, OptionsAreChecked) {
