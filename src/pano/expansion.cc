@@ -139,6 +139,15 @@ void CheckSize(const std::filesystem::path& path, int width, int height,
   }
 }
 
+// A refined frame (CV_32FC3 RGB) as RunStep wrote it, checked against its
+// camera.
+cv::Mat ReadRefined(const std::filesystem::path& path,
+                    const RasterCamera& camera) {
+  const cv::Mat refined = ReadImage(path).mat();
+  CheckSize(path, refined.cols, refined.rows, camera);
+  return refined;
+}
+
 // A refined frame's depth as RunStep wrote it, checked against its camera.
 cv::Mat ReadDepth(const std::filesystem::path& path,
                   const RasterCamera& camera) {
@@ -536,9 +545,8 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
       const ExpandedView& v = cams[k];
       const std::filesystem::path dm = StepDir(e) / Name("dir_", v.m, 1);
       const std::string& id = v.name;
-      const std::filesystem::path refined_path = dm / "refined" / (id + ".png");
-      const cv::Mat refined = ReadImage(refined_path).mat();
-      CheckSize(refined_path, refined.cols, refined.rows, v.camera);
+      const cv::Mat refined =
+          ReadRefined(dm / "refined" / (id + ".png"), v.camera);
       if (options_.gaussian_refinement) {
         const std::filesystem::path mask_path = dm / "mask" / (id + ".png");
         const cv::Mat mask = ReadMask(mask_path);
@@ -606,11 +614,8 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
       for (const ExpandedView& c : all_cameras_) {
         if (c.name != id) continue;
         const std::filesystem::path dm = StepDir(c.e) / Name("dir_", c.m, 1);
-        const std::filesystem::path refined_path =
-            dm / "refined" / (id + ".png");
-        const cv::Mat refined = ReadImage(refined_path).mat();
-        CheckSize(refined_path, refined.cols, refined.rows, c.camera);
-        loaded.push_back({c.camera, refined.clone(),
+        loaded.push_back({c.camera,
+                          ReadRefined(dm / "refined" / (id + ".png"), c.camera),
                           ReadDepth(dm / "depth" / (id + ".npy"), c.camera)});
       }
       loaded_source = s;
