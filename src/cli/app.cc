@@ -27,8 +27,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
      "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
     {"export",
      "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
-    {"run",
-     "Plan and run every stage on a video, images, workspace or dataset"},
     {"demo", "The built-in synthetic scene end to end, with a report"},
 };
 
@@ -83,6 +81,7 @@ int Main(int argc, char** argv) {
   AddFitCommand(app, &action);
   AddExpandCommand(app, &action);
   AddMakePairsCommand(app, &action);
+  AddRunCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

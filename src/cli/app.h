@@ -42,5 +42,6 @@ void AddDepthCommand(CLI::App& app, Action* action);
 void AddFitCommand(CLI::App& app, Action* action);
 void AddExpandCommand(CLI::App& app, Action* action);
 void AddMakePairsCommand(CLI::App& app, Action* action);
+void AddRunCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

@@ -18,6 +18,7 @@
 #include "colmap_ext/model.h"
 #include "evaluation/dataset.h"
 #include "src/cli/app.h"
+#include "src/cli/stages.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
@@ -47,14 +48,6 @@ constexpr double kStereoMinBaselineRatio = 0.01;
 constexpr double kStereoMaxAngleDeg = 35.0;
 constexpr std::pair<double, double> kStereoRangeMargin = {0.7, 1.5};
 constexpr std::size_t kMinStereoPoints = 20;
-
-struct DepthCommandOptions {
-  fs::path workspace;
-  fs::path dataset;
-  fs::path depth_dir;
-  int factor = 2;
-  int holdout = 0;
-};
 
 // A camera with all-zero distortion is a pinhole camera; anything else must
 // be undistorted first.
@@ -473,6 +466,8 @@ void StereoDepth(const DepthCommandOptions& o, const ColmapModel& model,
   WriteJson(out_dir / "stereo.json", report);
 }
 
+}  // namespace
+
 int RunDepthCommand(const DepthCommandOptions& o) {
   if (o.factor < 1) {
     throw Error("--factor", "", std::to_string(o.factor), "must be >= 1");
@@ -512,8 +507,6 @@ int RunDepthCommand(const DepthCommandOptions& o) {
       FramesPath(o.workspace).c_str());
   return kExitOk;
 }
-
-}  // namespace
 
 void AddDepthCommand(CLI::App& app, Action* action) {
   auto o = std::make_shared<DepthCommandOptions>();

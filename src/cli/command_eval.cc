@@ -9,24 +9,18 @@
 
 #include "evaluation/evaluate.h"
 #include "src/cli/app.h"
+#include "src/cli/stages.h"
 
 namespace pano4d::cli {
 namespace {
-
-struct EvalOptions {
-  std::string dataset;
-  std::string renders;
-  std::string out;
-  std::string lpips_weights;
-  std::string split = "val";
-  int factor = 2;
-};
 
 std::filesystem::path DatasetsMeta() {
   const char* env = std::getenv("PANO4D_DATASETS_META");
   return env ? std::filesystem::path(env)
              : std::filesystem::path(PANO4D_DATASETS_META_DIR);
 }
+
+}  // namespace
 
 int RunEval(const EvalOptions& options) {
   const Dataset dataset = LoadDataset(options.dataset, options.factor);
@@ -39,8 +33,6 @@ int RunEval(const EvalOptions& options) {
             << out.string() << ": metrics.json, metrics.md, per_frame.csv\n";
   return kExitOk;
 }
-
-}  // namespace
 
 void AddEvalCommand(CLI::App& app, Action* action) {
   auto options = std::make_shared<EvalOptions>();

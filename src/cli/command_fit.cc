@@ -18,6 +18,7 @@
 #include "evaluation/plot.h"
 #include "src/cli/app.h"
 #include "src/cli/expansion_outputs.h"
+#include "src/cli/stages.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
@@ -36,24 +37,6 @@
 namespace pano4d::cli {
 namespace fs = std::filesystem;
 namespace {
-
-struct FitCommandOptions {
-  fs::path workspace;
-  TrainerOptions trainer;
-  InitOptions init;
-  bool resume = false;
-  bool deterministic = false;
-  bool no_motion = false;
-  int checkpoint_every = 1000;
-  int validate_every = 1000;
-  int log_every = 100;
-  double time_budget = 0.0;
-  std::uint64_t seed = 0;
-  bool no_expansion = false;
-  ExpansionOptions expansion;
-  std::string prior_cmd;  // empty: the CPU geometry prior
-  int panorama_width = 1024;
-};
 
 // Panoramas are written at this aspect (equirectangular: 2 x 1).
 constexpr int kPanoramaAspect = 2;
@@ -191,6 +174,8 @@ std::string Format(const std::optional<double>& v, const char* unit = "") {
   std::snprintf(buffer, sizeof(buffer), "%.3f%s", *v, unit);
   return buffer;
 }
+
+}  // namespace
 
 int RunFitCommand(FitCommandOptions o) {
   if (o.deterministic && o.time_budget > 0) {
@@ -517,8 +502,6 @@ int RunFitCommand(FitCommandOptions o) {
               ckpt.c_str());
   return kExitOk;
 }
-
-}  // namespace
 
 void AddFitCommand(CLI::App& app, Action* action) {
   auto o = std::make_shared<FitCommandOptions>();

@@ -13,20 +13,13 @@
 #include "colmap_ext/sfm.h"
 #include "evaluation/dataset.h"
 #include "src/cli/app.h"
+#include "src/cli/stages.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
 namespace {
-
-struct SfmCommandOptions {
-  SfmOptions sfm;
-  bool no_dynamic_masks = false;
-  bool camera_per_image = false;
-  std::string compare_gt;
-  std::string dataset;
-};
 
 void CompareWithDataset(const fs::path& model_dir, const fs::path& root,
                         const fs::path& out_json) {
@@ -78,6 +71,8 @@ void CompareWithDataset(const fs::path& model_dir, const fs::path& root,
   WriteFileAtomically(out_json, j.dump(2) + "\n");
 }
 
+}  // namespace
+
 int RunSfmCommand(SfmCommandOptions options) {
   options.sfm.dynamic_masks = !options.no_dynamic_masks;
   options.sfm.single_camera = !options.camera_per_image;
@@ -106,8 +101,6 @@ int RunSfmCommand(SfmCommandOptions options) {
   }
   return kExitOk;
 }
-
-}  // namespace
 
 void AddSfmCommand(CLI::App& app, Action* action) {
   auto o = std::make_shared<SfmCommandOptions>();

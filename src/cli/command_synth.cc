@@ -9,16 +9,10 @@
 
 #include "evaluation/synth_generate.h"
 #include "src/cli/app.h"
+#include "src/cli/stages.h"
 #include "src/core/timer.h"
 
 namespace pano4d::cli {
-namespace {
-
-struct SynthCommandOptions {
-  synth::SynthOptions synth;
-  std::string out;
-};
-
 int RunSynth(const SynthCommandOptions& options) {
   Timer timer;
   const synth::SynthSummary s =
@@ -38,8 +32,6 @@ int RunSynth(const SynthCommandOptions& options) {
       100.0 * s.unseen_fraction, s.covisibility_threshold);
   return kExitOk;
 }
-
-}  // namespace
 
 void AddSynthCommand(CLI::App& app, Action* action) {
   auto options = std::make_shared<SynthCommandOptions>();

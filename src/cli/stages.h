@@ -1,0 +1,73 @@
+#pragma once
+
+// The pipeline's stages as functions, so that `pano4d run` and `pano4d demo`
+// call the same code as the subcommands (`pano4d sfm`, `depth`, `fit`,
+// `eval`, `synth`). Each returns an ExitCode and throws pano4d::Error on bad
+// input.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "colmap_ext/sfm.h"
+#include "evaluation/synth_generate.h"
+#include "src/gs/init.h"
+#include "src/gs/trainer.h"
+#include "src/pano/expansion.h"
+
+namespace pano4d::cli {
+
+struct SynthCommandOptions {
+  synth::SynthOptions synth;
+  std::string out;
+};
+int RunSynth(const SynthCommandOptions& options);
+
+struct SfmCommandOptions {
+  SfmOptions sfm;
+  bool no_dynamic_masks = false;
+  bool camera_per_image = false;
+  std::string compare_gt;
+  std::string dataset;
+};
+int RunSfmCommand(SfmCommandOptions options);
+
+struct DepthCommandOptions {
+  std::filesystem::path workspace;
+  std::filesystem::path dataset;
+  std::filesystem::path depth_dir;
+  int factor = 2;
+  int holdout = 0;
+};
+int RunDepthCommand(const DepthCommandOptions& options);
+
+struct FitCommandOptions {
+  std::filesystem::path workspace;
+  TrainerOptions trainer;
+  InitOptions init;
+  bool resume = false;
+  bool deterministic = false;
+  bool no_motion = false;
+  int checkpoint_every = 1000;
+  int validate_every = 1000;
+  int log_every = 100;
+  double time_budget = 0.0;
+  std::uint64_t seed = 0;
+  bool no_expansion = false;
+  ExpansionOptions expansion;
+  std::string prior_cmd;  // empty: the CPU geometry prior
+  int panorama_width = 1024;
+};
+int RunFitCommand(FitCommandOptions options);
+
+struct EvalOptions {
+  std::string dataset;
+  std::string renders;
+  std::string out;
+  std::string lpips_weights;
+  std::string split = "val";
+  int factor = 2;
+};
+int RunEval(const EvalOptions& options);
+
+}  // namespace pano4d::cli

@@ -1,0 +1,168 @@
+// `pano4d run` as a user runs it on the tiny synthetic scene: the plan it
+// prints and writes, the stages it leaves out (and why), resuming, and
+// its errors.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
+
+int RunPano4d(const std::string& args, const fs::path& log) {
+  const std::string command =
+      kBinary + " " + args + " > '" + log.string() + "' 2>&1";
+  const int raw = std::system(command.c_str());
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+}
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+nlohmann::json ReadJsonFile(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+const nlohmann::json& Stage(const nlohmann::json& plan,
+                            const std::string& name) {
+  for (const auto& s : plan["stages"])
+    if (s["stage"] == name) return s;
+  ADD_FAILURE() << "no stage " << name << " in " << plan.dump(2);
+  return plan;
+}
+
+class RunBinaryTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    for (const char* variant : {"", " --static"}) {
+      const std::string name = *variant ? "tiny_static" : "tiny";
+      ASSERT_EQ(
+          RunPano4d("synth --preset tiny --seed 5" + std::string(variant) +
+                        " --out '" + (dir_->path() / name).string() + "'",
+                    dir_->path() / "synth.log"),
+          0)
+          << Slurp(dir_->path() / "synth.log");
+    }
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static testing::TempDir* dir_;
+};
+testing::TempDir* RunBinaryTest::dir_ = nullptr;
+
+const char* kShortFit =
+    " --iterations 40 --expand-every 20 --validate-every 20";
+
+TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
+  const fs::path ws = dir_->path() / "ws";
+  const fs::path log = dir_->path() / "run.log";
+  ASSERT_EQ(
+      RunPano4d("run --dataset '" + (dir_->path() / "tiny").string() +
+                    "' --workspace '" + ws.string() + "' --eval" + kShortFit,
+                log),
+      0)
+      << Slurp(log);
+  const std::string out = Slurp(log);
+  EXPECT_NE(out.find("pano4d plan (dataset"), std::string::npos) << out;
+  EXPECT_NE(out.find("sfm        left out  poses given"), std::string::npos)
+      << out;
+
+  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  EXPECT_FALSE(Stage(plan, "sfm")["run"].get<bool>());
+  EXPECT_FALSE(Stage(plan, "depth")["run"].get<bool>());
+  EXPECT_TRUE(Stage(plan, "motion")["run"].get<bool>());
+  EXPECT_FALSE(Stage(plan, "motion")["pending"].get<bool>());
+  EXPECT_TRUE(Stage(plan, "expansion")["run"].get<bool>());
+  EXPECT_TRUE(Stage(plan, "eval")["run"].get<bool>());
+  EXPECT_GT(plan["facts"]["dynamic_fraction"].get<double>(), 0.0);
+  EXPECT_GT(plan["facts"]["unseen_fraction"].get<double>(), 0.0);
+  EXPECT_EQ(plan["results"]["fit"]["status"], "done");
+  EXPECT_EQ(plan["results"]["eval"]["status"], "done");
+
+  const nlohmann::json fit = ReadJsonFile(ws / "pano4d/fit.json");
+  EXPECT_EQ(fit["iterations"], 40);
+  EXPECT_GT(fit["motion_bases"].get<int>(), 0);
+  EXPECT_FALSE(fit["expansion"]["steps"].empty());
+  const nlohmann::json metrics =
+      ReadJsonFile(ws / "pano4d/metrics/metrics.json");
+  EXPECT_TRUE(metrics["mean"]["mpsnr"].is_number()) << metrics.dump(2);
+
+  // Again: nothing is redone.
+  ASSERT_EQ(
+      RunPano4d("run --dataset '" + (dir_->path() / "tiny").string() +
+                    "' --workspace '" + ws.string() + "' --eval" + kShortFit,
+                log),
+      0)
+      << Slurp(log);
+  const nlohmann::json again = ReadJsonFile(ws / "pano4d/plan.json");
+  EXPECT_EQ(again["results"]["depth"]["status"],
+            "complete from an earlier run");
+  EXPECT_EQ(again["results"]["fit"]["status"], "complete from an earlier run");
+}
+
+TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
+  const fs::path ws = dir_->path() / "ws_static";
+  const fs::path log = dir_->path() / "run_static.log";
+  ASSERT_EQ(
+      RunPano4d("run --dataset '" + (dir_->path() / "tiny_static").string() +
+                    "' --workspace '" + ws.string() + "' --no-expansion" +
+                    kShortFit,
+                log),
+      0)
+      << Slurp(log);
+  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  EXPECT_FALSE(Stage(plan, "motion")["run"].get<bool>());
+  EXPECT_NE(Stage(plan, "motion")["why"].get<std::string>().find(
+                "no dynamic content"),
+            std::string::npos);
+  EXPECT_NE(
+      Stage(plan, "expansion")["why"].get<std::string>().find("--no-expansion"),
+      std::string::npos);
+  EXPECT_FALSE(Stage(plan, "eval")["run"].get<bool>());
+  EXPECT_FALSE(plan["results"].contains("eval"));
+  const nlohmann::json fit = ReadJsonFile(ws / "pano4d/fit.json");
+  EXPECT_EQ(fit["motion_bases"], 0);
+  EXPECT_EQ(fit["dynamic_gaussians"], 0);
+  EXPECT_TRUE(fit["expansion"].is_null());
+}
+
+TEST_F(RunBinaryTest, BadInputsAreRefusedWithTheReason) {
+  const fs::path log = dir_->path() / "run_bad.log";
+  const std::string tiny = (dir_->path() / "tiny").string();
+  // Two inputs: a usage error.
+  EXPECT_EQ(
+      RunPano4d("run --dataset '" + tiny + "' --images '" + tiny +
+                    "' --workspace '" + (dir_->path() / "x").string() + "'",
+                log),
+      64)
+      << Slurp(log);
+  // No workspace.
+  EXPECT_EQ(RunPano4d("run --dataset '" + tiny + "'", log), 1) << Slurp(log);
+  EXPECT_NE(Slurp(log).find("--workspace"), std::string::npos) << Slurp(log);
+  // A folder that is no COLMAP workspace: named, with what was looked for.
+  const fs::path empty = dir_->path() / "not_colmap";
+  fs::create_directories(empty);
+  EXPECT_EQ(RunPano4d("run --colmap '" + empty.string() + "'", log), 1);
+  const std::string err = Slurp(log);
+  EXPECT_NE(err.find(empty.string()), std::string::npos) << err;
+  EXPECT_NE(err.find("sparse/0"), std::string::npos) << err;
+}
+
+}  // namespace
+}  // namespace pano4d
