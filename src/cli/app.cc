@@ -27,7 +27,6 @@ const std::vector<PlannedCommand> kPlannedCommands = {
      "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
     {"export",
      "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
-    {"demo", "The built-in synthetic scene end to end, with a report"},
 };
 
 }  // namespace
@@ -82,6 +81,7 @@ int Main(int argc, char** argv) {
   AddExpandCommand(app, &action);
   AddMakePairsCommand(app, &action);
   AddRunCommand(app, &action);
+  AddDemoCommand(app, &action);
   for (const PlannedCommand& command : kPlannedCommands)
     AddPlannedCommand(app, command.name, command.description, &action);
 

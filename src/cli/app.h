@@ -43,5 +43,6 @@ void AddFitCommand(CLI::App& app, Action* action);
 void AddExpandCommand(CLI::App& app, Action* action);
 void AddMakePairsCommand(CLI::App& app, Action* action);
 void AddRunCommand(CLI::App& app, Action* action);
+void AddDemoCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

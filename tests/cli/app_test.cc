@@ -60,7 +60,7 @@ TEST(CliTest, VersionAndHelp) {
 }
 
 TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name : {"render", "export", "demo"}) {
+  for (const char* name : {"render", "export"}) {
     const Result r = RunCli({name, "--workspace", "ws"});
     EXPECT_EQ(r.status, kExitNotBuilt) << name;
     EXPECT_EQ(Lines(r.err), 1) << r.err;
