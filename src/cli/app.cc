@@ -12,24 +12,6 @@
 #include "src/core/version.h"
 
 namespace pano4d::cli {
-namespace {
-
-// Stages of the blueprint that this build does not have yet. They are
-// registered so that `pano4d --help` shows the whole workflow, and each says
-// in one line that it is not built (exit status 2).
-struct PlannedCommand {
-  const char* name;
-  const char* description;
-};
-
-const std::vector<PlannedCommand> kPlannedCommands = {
-    {"render",
-     "Render novel-view videos (orbit, spiral, bullet time, or a camera file)"},
-    {"export",
-     "Export 3DGS PLY per time step and the cameras as a COLMAP model"},
-};
-
-}  // namespace
 
 void AddPlannedCommand(CLI::App& parent, const std::string& path,
                        const std::string& description, Action* action) {
@@ -82,8 +64,8 @@ int Main(int argc, char** argv) {
   AddMakePairsCommand(app, &action);
   AddRunCommand(app, &action);
   AddDemoCommand(app, &action);
-  for (const PlannedCommand& command : kPlannedCommands)
-    AddPlannedCommand(app, command.name, command.description, &action);
+  AddRenderCommand(app, &action);
+  AddExportCommand(app, &action);
 
   try {
     app.parse(argc, argv);

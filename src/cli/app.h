@@ -44,5 +44,7 @@ void AddExpandCommand(CLI::App& app, Action* action);
 void AddMakePairsCommand(CLI::App& app, Action* action);
 void AddRunCommand(CLI::App& app, Action* action);
 void AddDemoCommand(CLI::App& app, Action* action);
+void AddRenderCommand(CLI::App& app, Action* action);
+void AddExportCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

@@ -9,17 +9,15 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
+#include "src/cli/scene_outputs.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
-#include "src/gs/trainer.h"
 #include "src/render/ply.h"
-#include "src/render/rasterizer.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -62,28 +60,6 @@ cv::Mat Stack(const std::vector<std::vector<cv::Mat>>& rows) {
   return out;
 }
 
-// OpenCV picks the container from the extension, so the temporary name
-// keeps it; renamed when complete.
-bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
-                std::vector<std::string>* notes) {
-  if (frames.empty()) return false;
-  const fs::path partial =
-      path.parent_path() / (path.stem().string() + ".partial.mp4");
-  cv::VideoWriter writer(partial.string(),
-                         cv::VideoWriter::fourcc('m', 'p', '4', 'v'), kVideoFps,
-                         frames.front().size());
-  if (!writer.isOpened()) {
-    notes->push_back(path.filename().string() +
-                     ": OpenCV could not open an MP4 writer (no FFmpeg "
-                     "backend?); the PNG contact sheet has the same views");
-    return false;
-  }
-  for (const cv::Mat& f : frames) writer.write(f);
-  writer.release();
-  fs::rename(partial, path);
-  return true;
-}
-
 struct Writer {
   fs::path dir;
   ReportSummary* summary;
@@ -92,7 +68,7 @@ struct Writer {
     summary->files.push_back(name);
   }
   void Video(const std::string& name, const std::vector<cv::Mat>& frames) {
-    if (WriteVideo(dir / name, frames, &summary->notes))
+    if (WriteVideo(dir / name, frames, kVideoFps, &summary->notes))
       summary->files.push_back(name);
   }
   void Copy(const fs::path& from, const std::string& name) {
@@ -166,64 +142,35 @@ void ValidationViews(const fs::path& ws, const WorkspaceFrames& frames,
 // middle of the video: a row per direction (the source view, then steps
 // 1..E), and a video that swings from one direction's last step through the
 // source view to the other's.
-void ExpandedViews(const fs::path& ws, const WorkspaceFrames& frames,
-                   const GaussianScene& scene, Writer* out) {
+void ExpandedViews(const fs::path& ws, const FittedWorkspace& fitted,
+                   Writer* out) {
   const fs::path path = ws / "pano4d" / "expansion" / "trajectories.json";
   if (!fs::exists(path)) {
     out->summary->notes.push_back(
         "expanded views: no expansion ran (see plan.json)");
     return;
   }
-  const nlohmann::json trajectories = ReadJson(path);
-  const nlohmann::json& views = trajectories.at("views");
+  const std::vector<ExpandedView> views = ReadTrajectories(path);
   std::vector<std::string> sources;
-  for (const auto& v : views) sources.push_back(v.at("source"));
+  for (const ExpandedView& v : views) sources.push_back(v.name);
   std::sort(sources.begin(), sources.end());
   sources.erase(std::unique(sources.begin(), sources.end()), sources.end());
   if (sources.empty()) return;
   const std::string source = sources[sources.size() / 2];
   const WorkspaceFrame* frame = nullptr;
-  for (const WorkspaceFrame& f : frames.train)
+  for (const WorkspaceFrame& f : fitted.frames.train)
     if (f.name == source) frame = &f;
   if (!frame) {
     throw Error(path.string(), "source", source,
                 "is not a training frame of frames.json");
   }
-
-  Rasterizer rasterizer;
-  GaussianModel model;
-  scene.ComposeAt(frame->time, &model);
-  RenderOutput rendered;
-  const auto render = [&](const RasterCamera& camera) {
-    rasterizer.Forward(model, camera, RasterSettings{}, &rendered);
-    cv::Mat rgb(rendered.height, rendered.width, CV_32FC3);
-    std::copy(rendered.rgb.begin(), rendered.rgb.end(), rgb.ptr<float>());
-    return pano4d::Image::FromRgb32f(rgb).ToBgr8();
-  };
-  const cv::Mat source_view = render(RasterCamera::FromPosed(frame->camera));
-  // [m][e-1]: the render at direction m, step e.
+  SceneRenderer renderer(fitted.scene);
+  const cv::Mat source_view =
+      renderer.Render(RasterCamera::FromPosed(frame->camera), frame->time);
+  // [m][e]: the render at direction m, step e.
   std::map<int, std::map<int, cv::Mat>> at;
-  std::map<int, std::map<int, double>> angle;
-  for (const auto& v : views) {
-    if (v.at("source") != source) continue;
-    const nlohmann::json& c = v.at("camera");
-    RasterCamera camera;
-    camera.width = c.at("width");
-    camera.height = c.at("height");
-    camera.fx = c.at("fx");
-    camera.fy = c.at("fy");
-    camera.cx = c.at("cx");
-    camera.cy = c.at("cy");
-    const auto& q = c.at("qvec");
-    camera.rotation = Eigen::Quaternionf(q[0].get<float>(), q[1].get<float>(),
-                                         q[2].get<float>(), q[3].get<float>())
-                          .normalized()
-                          .toRotationMatrix();
-    const auto& t = c.at("tvec");
-    camera.translation = {t[0].get<float>(), t[1].get<float>(),
-                          t[2].get<float>()};
-    at[v.at("m")][v.at("e")] = render(camera);
-  }
+  for (const ExpandedView& v : views)
+    if (v.name == source) at[v.m][v.e] = renderer.Render(v.camera, v.t);
   std::vector<std::vector<cv::Mat>> rows;
   for (auto& [m, steps] : at) {
     std::vector<cv::Mat> row{Labelled(source_view, source + " (source)")};
@@ -299,7 +246,8 @@ ReportSummary WriteReport(const fs::path& ws) {
   }
   const nlohmann::json plan = ReadJson(plan_path);
   const nlohmann::json fit = ReadJson(fit_path);
-  const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
+  const FittedWorkspace fitted = LoadFittedWorkspace(ws);
+  const WorkspaceFrames& frames = fitted.frames;
 
   out.Copy(plan_path, "plan.json");
   out.Copy(p4d / "metrics" / "fit.png", "fit.png");
@@ -312,9 +260,8 @@ ReportSummary WriteReport(const fs::path& ws) {
   }
   ValidationViews(ws, frames, &out);
 
-  const GaussianScene scene =
-      ReadCheckpointScene(p4d / "checkpoints" / "fit.ckpt");
-  ExpandedViews(ws, frames, scene, &out);
+  const GaussianScene& scene = fitted.scene;
+  ExpandedViews(ws, fitted, &out);
   GaussianModel model;
   scene.ComposeAt(scene.canonical_time, &model);
   const std::string ply =

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
+#include "src/core/json.h"
 
 namespace pano4d {
 namespace {
@@ -144,6 +145,111 @@ nlohmann::json ToJson(const ExpandedView& view) {
           {"t", view.t},
           {"source", view.name},
           {"camera", CameraToJson(view.camera)}};
+}
+
+RasterCamera RasterCameraFromJson(const nlohmann::json& j,
+                            const std::string& source) {
+  if (!j.is_object()) {
+    throw Error(source, "camera", j.dump(), "expected an object");
+  }
+  RasterCamera c;
+  c.width = GetJson<int>(j, "width", source);
+  c.height = GetJson<int>(j, "height", source);
+  c.fx = static_cast<float>(GetJson<double>(j, "fx", source));
+  c.fy = static_cast<float>(GetJson<double>(j, "fy", source));
+  c.cx = static_cast<float>(GetJson<double>(j, "cx", source));
+  c.cy = static_cast<float>(GetJson<double>(j, "cy", source));
+  const auto q = GetJson<std::vector<double>>(j, "qvec", source);
+  const auto t = GetJson<std::vector<double>>(j, "tvec", source);
+  if (q.size() != 4 || t.size() != 3) {
+    throw Error(source, "qvec/tvec", "",
+                "expected 4 and 3 numbers (COLMAP's w, x, y, z and tvec)");
+  }
+  const Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
+  if (!(c.width > 0 && c.height > 0 && c.fx > 0 && c.fy > 0) ||
+      !(quat.norm() > 0.5 && quat.norm() < 2.0) ||
+      !std::isfinite(t[0] + t[1] + t[2]) || !std::isfinite(c.cx + c.cy)) {
+    throw Error(source, "camera", j.dump(),
+                "needs a positive size and focal length, a unit quaternion "
+                "and a finite translation");
+  }
+  c.rotation = quat.normalized().toRotationMatrix().cast<float>();
+  c.translation = Eigen::Vector3d(t[0], t[1], t[2]).cast<float>();
+  return c;
+}
+
+void VideoPathOptions::Check() const {
+  if (frames < 1) {
+    throw Error("video path", "frames", std::to_string(frames),
+                "must be at least 1");
+  }
+  if (!(degrees > 0 && degrees <= 360)) {
+    throw Error("video path", "degrees", std::to_string(degrees),
+                "must be in (0, 360]");
+  }
+  if (num_times < 1 || time < 0 || time >= num_times) {
+    throw Error("video path", "time", std::to_string(time),
+                "must be in [0, " + std::to_string(num_times) + ")");
+  }
+}
+
+std::vector<TimedCamera> VideoCameras(const VideoPathOptions& o,
+                                      const RasterCamera& reference,
+                                      const Eigen::Vector3d& center) {
+  o.Check();
+  const Eigen::Matrix3d r = reference.rotation.cast<double>();
+  const Eigen::Vector3d right = r.row(0).transpose();
+  const Eigen::Vector3d up = -r.row(1).transpose();
+  const double span = o.degrees * kDegrees;
+  std::vector<TimedCamera> out;
+  for (int k = 0; k < o.frames; ++k) {
+    const double u = o.frames > 1 ? static_cast<double>(k) / o.frames : 0.0;
+    const int running = static_cast<int>(u * o.num_times);
+    TimedCamera c;
+    switch (o.path) {
+      case VideoPath::kOrbit:
+        c.camera = OrbitCamera(reference, center, up, span * u);
+        c.time = running;
+        break;
+      case VideoPath::kSpiral: {
+        const double phi = 2 * M_PI * u;
+        c.camera = OrbitCamera(
+            OrbitCamera(reference, center, up, span * std::sin(phi)), center,
+            right, span * std::cos(phi));
+        c.time = running;
+        break;
+      }
+      case VideoPath::kBullet:
+        // -swing/2 .. +swing/2 .. -swing/2 (a triangle wave over the video).
+        c.camera = OrbitCamera(reference, center, up,
+                               span * (0.5 - std::abs(2 * u - 1)));
+        c.time = o.time;
+        break;
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::vector<TimedCamera> ReadCameraFile(const std::string& path) {
+  const nlohmann::json j = ReadJson(path);
+  const nlohmann::json& views =
+      j.is_object() && j.contains("views") ? j.at("views") : j;
+  if (!views.is_array() || views.empty()) {
+    throw Error(path, "views", "",
+                "expected a non-empty list of {\"camera\": {...}, \"t\": T} "
+                "(the layout of trajectories.json)");
+  }
+  std::vector<TimedCamera> out;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const std::string source = path + " view " + std::to_string(i);
+    if (!views[i].is_object() || !views[i].contains("camera")) {
+      throw Error(source, "camera", "", "missing");
+    }
+    out.push_back({RasterCameraFromJson(views[i].at("camera"), source),
+                   views[i].value("t", 0)});
+  }
+  return out;
 }
 
 }  // namespace pano4d

@@ -70,5 +70,39 @@ std::vector<ExpandedView> ExpansionViews(
 // with COLMAP's qvec (w, x, y, z) and tvec of cam_from_world.
 nlohmann::json ToJson(const ExpandedView& view);
 nlohmann::json CameraToJson(const RasterCamera& camera);
+// The inverse of CameraToJson. Throws pano4d::Error naming `source` and the
+// field that is missing, of the wrong type or out of range.
+RasterCamera RasterCameraFromJson(const nlohmann::json& json,
+                            const std::string& source);
+
+// Novel-view videos (`pano4d render`): cameras moved about `center` from
+// `reference` (its intrinsics kept), each with the time it shows.
+struct TimedCamera {
+  RasterCamera camera;
+  int time = 0;
+};
+enum class VideoPath {
+  kOrbit,   // about the up axis through the centre, time running
+  kSpiral,  // a circle of `degrees` around the reference view, time running
+  kBullet,  // time frozen, swinging +-degrees/2 about the up axis and back
+};
+struct VideoPathOptions {
+  VideoPath path = VideoPath::kOrbit;
+  int frames = 60;
+  double degrees = 360.0;  // orbit: the arc; spiral: the radius; bullet: the swing
+  int num_times = 1;       // times run 0..num_times-1 over the video
+  int time = 0;            // bullet time
+  void Check() const;      // throws pano4d::Error naming the field
+};
+// Up is the reference camera's -y. Frame 0 of orbit and spiral is the
+// reference camera rotated by 0 (orbit) or `degrees` about the right axis
+// (spiral); every camera keeps its distance to `center` and looks at it as
+// the reference does.
+std::vector<TimedCamera> VideoCameras(const VideoPathOptions& options,
+                                      const RasterCamera& reference,
+                                      const Eigen::Vector3d& center);
+// A camera file: {"views": [{"camera": {...}, "t": T}, ...]} (the layout of
+// trajectories.json) or the list alone. Throws pano4d::Error naming the file.
+std::vector<TimedCamera> ReadCameraFile(const std::string& path);
 
 }  // namespace pano4d

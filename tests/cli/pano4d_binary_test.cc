@@ -55,9 +55,10 @@ TEST(Pano4dBinaryTest, CorruptInputsFailWithOneLineAndNonZeroStatus) {
 TEST(Pano4dBinaryTest, VersionAndNotBuilt) {
   testing::TempDir dir;
   EXPECT_EQ(RunBinary("--version", dir).status, 0);
-  const Result r = RunBinary("demo", dir);
+  const Result r = RunBinary("bench stability", dir);
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("pano4d demo: not built yet"), std::string::npos)
+  EXPECT_NE(r.err.find("pano4d bench stability: not built yet"),
+            std::string::npos)
       << r.err;
 }
 

@@ -3,6 +3,7 @@
 // its errors.
 #include <sys/wait.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -217,6 +218,63 @@ TEST_F(RunBinaryTest, DemoWritesAReportThatEvalReproduces) {
                      evaluated["mean"][key].get<double>())
         << key;
   }
+}
+
+// render and export on a fitted workspace: frames, videos, camera files
+// that round-trip, PLY per time step, the COLMAP model, and bad requests.
+TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
+  const fs::path ws = dir_->path() / "ws_render";
+  const fs::path log = dir_->path() / "render.log";
+  ASSERT_EQ(RunPano4d("run --dataset '" + (dir_->path() / "tiny").string() +
+                          "' --workspace '" + ws.string() + "'" + kShortFit,
+                      log),
+            0)
+      << Slurp(log);
+  const std::string w = " --workspace '" + ws.string() + "'";
+  ASSERT_EQ(RunPano4d("render" + w + " --trajectory orbit --frames 8", log), 0)
+      << Slurp(log);
+  const fs::path orbit = ws / "pano4d/renders/orbit";
+  for (int i = 0; i < 8; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%05d.png", i);
+    EXPECT_TRUE(fs::exists(orbit / name)) << name;
+  }
+  const nlohmann::json cameras = ReadJsonFile(orbit / "cameras.json");
+  ASSERT_EQ(cameras["views"].size(), 8u);
+  // The camera file renders the same frames again.
+  ASSERT_EQ(RunPano4d("render" + w + " --trajectory '" +
+                          (orbit / "cameras.json").string() + "' --out '" +
+                          (dir_->path() / "again").string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  for (const char* f : {"00000.png", "00005.png"}) {
+    EXPECT_EQ(Slurp(orbit / f), Slurp(dir_->path() / "again" / f)) << f;
+  }
+  // Bullet time: every view at the time asked for.
+  ASSERT_EQ(
+      RunPano4d("render" + w + " --trajectory bullet --frames 6 --time 2", log),
+      0)
+      << Slurp(log);
+  for (const auto& v :
+       ReadJsonFile(ws / "pano4d/renders/bullet/cameras.json")["views"])
+    EXPECT_EQ(v["t"], 2);
+  // Bad requests name what is wrong.
+  EXPECT_EQ(RunPano4d("render" + w + " --trajectory nowhere.json", log), 1);
+  EXPECT_NE(Slurp(log).find("nowhere.json"), std::string::npos) << Slurp(log);
+  EXPECT_EQ(RunPano4d("render" + w + " --trajectory bullet --time 999", log),
+            1);
+  EXPECT_NE(Slurp(log).find("--time"), std::string::npos) << Slurp(log);
+
+  ASSERT_EQ(RunPano4d("export" + w, log), 0) << Slurp(log);
+  const nlohmann::json frames = ReadJsonFile(ws / "pano4d/frames.json");
+  int plys = 0;
+  for (const auto& e : fs::directory_iterator(ws / "pano4d/export/ply"))
+    plys += e.path().extension() == ".ply";
+  EXPECT_EQ(plys, frames["num_times"].get<int>());
+  const std::string images = Slurp(ws / "pano4d/export/colmap/images.txt");
+  EXPECT_NE(images.find("source/"), std::string::npos);
+  EXPECT_NE(images.find("step_01/dir_0/"), std::string::npos);
 }
 
 }  // namespace

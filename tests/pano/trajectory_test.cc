@@ -149,5 +149,85 @@ TEST(TrajectoryTest, JsonHoldsColmapPose) {
   EXPECT_EQ(j["camera"]["width"], 64);
 }
 
+TEST(TrajectoryTest, CameraJsonRoundTripsAndBadCamerasAreNamed) {
+  const RasterCamera c = LookAt({1, -4, 2}, {0, 1, 0.5f});
+  const RasterCamera back = RasterCameraFromJson(CameraToJson(c), "cam");
+  EXPECT_EQ(back.width, c.width);
+  EXPECT_FLOAT_EQ(back.fx, c.fx);
+  EXPECT_LT((back.rotation - c.rotation).norm(), 1e-5);
+  EXPECT_LT((back.translation - c.translation).norm(), 1e-5);
+  nlohmann::json bad = CameraToJson(c);
+  bad["qvec"] = {0, 0, 0, 0};
+  EXPECT_THROW(RasterCameraFromJson(bad, "cam"), Error);
+  bad = CameraToJson(c);
+  bad.erase("fx");
+  try {
+    RasterCameraFromJson(bad, "views.json view 3");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("views.json view 3"),
+              std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("fx"), std::string::npos);
+  }
+}
+
+TEST(TrajectoryTest, VideoPathsKeepTheCentreInViewAndTheirTimes) {
+  const Eigen::Vector3d center(0, 1, 0.5);
+  const RasterCamera ref = LookAt({1, -4, 2}, center.cast<float>());
+  const Eigen::Vector2d at = PixelOf(ref, center);
+  const double distance = (ref.Center().cast<double>() - center).norm();
+  VideoPathOptions o;
+  o.frames = 24;
+  o.num_times = 12;
+  for (VideoPath path :
+       {VideoPath::kOrbit, VideoPath::kSpiral, VideoPath::kBullet}) {
+    o.path = path;
+    o.degrees = path == VideoPath::kSpiral ? 10 : 360;
+    o.time = 5;
+    const std::vector<TimedCamera> cams = VideoCameras(o, ref, center);
+    ASSERT_EQ(cams.size(), 24u);
+    for (std::size_t k = 0; k < cams.size(); ++k) {
+      const RasterCamera& c = cams[k].camera;
+      // A rigid motion about the centre: same distance, same pixel.
+      EXPECT_NEAR((c.Center().cast<double>() - center).norm(), distance, 1e-4);
+      EXPECT_LT((PixelOf(c, center) - at).norm(), 1e-2);
+      if (path == VideoPath::kBullet) {
+        EXPECT_EQ(cams[k].time, 5);
+      } else {
+        EXPECT_EQ(cams[k].time, static_cast<int>(k) / 2);  // 24 over 12
+      }
+    }
+  }
+  // The orbit starts at the reference and turns about its up axis: half way
+  // round, the camera is behind the centre.
+  o.path = VideoPath::kOrbit;
+  o.degrees = 360;
+  const std::vector<TimedCamera> orbit = VideoCameras(o, ref, center);
+  EXPECT_LT((orbit[0].camera.Center() - ref.Center()).norm(), 1e-5);
+  const Eigen::Vector3d behind = 2 * center - ref.Center().cast<double>();
+  const Eigen::Vector3d up = -ref.rotation.cast<double>().row(1).transpose();
+  const Eigen::Vector3d half = orbit[12].camera.Center().cast<double>();
+  // Reflected through the up axis: equal height along up, opposite side.
+  EXPECT_NEAR((half - center).dot(up),
+              (ref.Center().cast<double>() - center).dot(up), 1e-4);
+  EXPECT_LT(((half - behind) - (half - behind).dot(up) * up).norm(), 1e-3);
+  // The bullet swings +-degrees/2: frame 0 and the middle are `degrees` apart.
+  o.path = VideoPath::kBullet;
+  o.degrees = 60;
+  const std::vector<TimedCamera> bullet = VideoCameras(o, ref, center);
+  const Eigen::Vector3d a = bullet[0].camera.Center().cast<double>() - center;
+  const Eigen::Vector3d b = bullet[12].camera.Center().cast<double>() - center;
+  const auto flat = [&](const Eigen::Vector3d& v) {
+    return v - v.dot(up) * up;
+  };
+  EXPECT_NEAR(Angle(flat(a), flat(b)), 60 * kDeg, 1e-4);
+
+  o.degrees = 0;
+  EXPECT_THROW(VideoCameras(o, ref, center), Error);
+  o.degrees = 30;
+  o.time = 12;
+  EXPECT_THROW(VideoCameras(o, ref, center), Error);
+}
+
 }  // namespace
 }  // namespace pano4d
