@@ -5,6 +5,7 @@
 # e.g. --workspace DIR or --iterations N.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-bash scripts/setup.sh
+# The demo needs only the binary; scripts/test.sh builds the tests.
+PANO4D_TARGET=${PANO4D_TARGET:-pano4d} bash scripts/setup.sh
 BUILD_DIR=${PANO4D_BUILD_DIR:-build}
 exec "$BUILD_DIR/pano4d" demo "$@"

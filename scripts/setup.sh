@@ -4,6 +4,8 @@
 # Idempotent and quiet: a second run installs nothing and rebuilds nothing.
 #   PANO4D_BUILD_DIR  build directory (default: build)
 #   PANO4D_JOBS       parallel compile jobs (default: nproc)
+#   PANO4D_TARGET     what to build (default: everything, tests included;
+#                     scripts/demo.sh builds only the pano4d binary)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -31,7 +33,9 @@ if ! cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >"$BUILD_DIR
   echo "pano4d setup: CMake configure failed; the full log is $BUILD_DIR/configure.log" >&2
   exit 1
 fi
-if ! cmake --build "$BUILD_DIR" -j "$JOBS" >"$BUILD_DIR/build.log" 2>&1; then
+TARGET_ARGS=()
+if [[ -n "${PANO4D_TARGET:-}" ]]; then TARGET_ARGS=(--target "$PANO4D_TARGET"); fi
+if ! cmake --build "$BUILD_DIR" -j "$JOBS" "${TARGET_ARGS[@]}" >"$BUILD_DIR/build.log" 2>&1; then
   grep -E "error|Error" "$BUILD_DIR/build.log" | head -n 30 >&2 || tail -n 30 "$BUILD_DIR/build.log" >&2
   echo "pano4d setup: build failed; the full log is $BUILD_DIR/build.log" >&2
   exit 1

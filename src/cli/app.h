@@ -33,6 +33,7 @@ void AddPlannedCommand(CLI::App& parent, const std::string& path,
 
 void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);
+void AddBenchStability(CLI::App& bench, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);

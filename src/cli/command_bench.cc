@@ -388,9 +388,7 @@ void AddBenchCommand(CLI::App& app, Action* action) {
   });
 
   AddBenchRender(*bench, action);
-  AddPlannedCommand(*bench, "bench stability",
-                    "Stiff and extreme cases: count of non-finite values",
-                    action);
+  AddBenchStability(*bench, action);
   AddPlannedCommand(*bench, "bench budget",
                     "PSNR/mPSNR/uPSNR against wall time across budgets",
                     action);

@@ -8,7 +8,6 @@
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
-#include "src/cli/report.h"
 #include "src/cli/run.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
@@ -64,7 +63,7 @@ int RunDemo(const DemoOptions& o) {
   r.fit.seed = o.seed;
   RunReport run;
   RunPipeline(r, &run);
-  const ReportSummary report = WriteReport(o.workspace);
+  const ReportSummary& report = run.report;
   std::printf("pano4d demo: done in %.1f s; the report is %s\n",
               total.WallSeconds(), (report.dir / "index.md").c_str());
   for (const std::string& f : report.files)

@@ -230,13 +230,18 @@ int RunPipeline(const RunCommandOptions& o, RunReport* report) {
       return std::string("done");
     });
   }
+  const ReportSummary summary = WriteReport(ws);
   if (report) {
     report->plan = plan;
     report->stages = log.entries;
     report->seconds = total.WallSeconds();
+    report->report = summary;
   }
-  std::printf("pano4d run: done in %.1f s; plan and stage times in %s\n",
-              total.WallSeconds(), (ws / "pano4d" / "plan.json").c_str());
+  std::printf(
+      "pano4d run: done in %.1f s; plan and stage times in %s, the report "
+      "in %s\n",
+      total.WallSeconds(), (ws / "pano4d" / "plan.json").c_str(),
+      (summary.dir / "index.md").c_str());
   return kExitOk;
 }
 
@@ -293,8 +298,9 @@ void AddRunCommand(CLI::App& app, Action* action) {
                   "--help`); default: the CPU geometry prior");
   sub->footer(
       "Writes WS/pano4d/plan.json (the plan, the facts it was made from, and "
-      "per stage its status and seconds) and what each stage writes (see "
-      "`pano4d sfm|depth|fit|eval --help`). Run it again to resume.");
+      "per stage its status and seconds), what each stage writes (see "
+      "`pano4d sfm|depth|fit|eval --help`), and WS/report/index.md (as "
+      "`pano4d demo`). Run it again to resume.");
   sub->callback([action, o] {
     *action = [o] {
       RunCommandOptions r = *o;

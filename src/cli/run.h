@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/cli/planner.h"
+#include "src/cli/report.h"
 #include "src/cli/stages.h"
 
 namespace pano4d::cli {
@@ -27,6 +28,7 @@ struct RunReport {
   Plan plan;
   nlohmann::json stages;  // per stage: status and seconds
   double seconds = 0.0;
+  ReportSummary report;  // WS/report, written last
 };
 
 // The facts the plan is made from, gathered from the input (and from the
@@ -34,7 +36,8 @@ struct RunReport {
 PlanFacts GatherFacts(const RunCommandOptions& options);
 
 // Plans, prints the plan, writes WS/pano4d/plan.json and runs the stages,
-// each resuming what an earlier run left. Throws pano4d::Error.
+// each resuming what an earlier run left, then writes the report folder
+// WS/report (report.h). Throws pano4d::Error.
 int RunPipeline(const RunCommandOptions& options, RunReport* report);
 
 }  // namespace pano4d::cli

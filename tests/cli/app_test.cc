@@ -60,7 +60,7 @@ TEST(CliTest, VersionAndHelp) {
 }
 
 TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name : {"stability", "budget"}) {
+  for (const char* name : {"budget"}) {
     const Result r = RunCli({"bench", name, "--workspace", "ws"});
     EXPECT_EQ(r.status, kExitNotBuilt) << name;
     EXPECT_EQ(Lines(r.err), 1) << r.err;

@@ -55,10 +55,9 @@ TEST(Pano4dBinaryTest, CorruptInputsFailWithOneLineAndNonZeroStatus) {
 TEST(Pano4dBinaryTest, VersionAndNotBuilt) {
   testing::TempDir dir;
   EXPECT_EQ(RunBinary("--version", dir).status, 0);
-  const Result r = RunBinary("bench stability", dir);
+  const Result r = RunBinary("bench budget", dir);
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("pano4d bench stability: not built yet"),
-            std::string::npos)
+  EXPECT_NE(r.err.find("pano4d bench budget: not built yet"), std::string::npos)
       << r.err;
 }
 

@@ -277,5 +277,31 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   EXPECT_NE(images.find("step_01/dir_0/"), std::string::npos);
 }
 
+// The stiff and extreme suite: every case runs and counts values, none of
+// them non-finite.
+TEST_F(RunBinaryTest, StabilitySuiteFindsNoNonFiniteValue) {
+  const fs::path log = dir_->path() / "stability.log";
+  const fs::path out = dir_->path() / "stability.json";
+  ASSERT_EQ(RunPano4d("bench stability --fit-iterations 30 --out '" +
+                          out.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const nlohmann::json j = ReadJsonFile(out);
+  EXPECT_EQ(j["non_finite"], 0);
+  ASSERT_EQ(j["cases"].size(), 8u) << j.dump(2);
+  for (const auto& c : j["cases"]) {
+    EXPECT_GT(c["values"].get<long long>(), 0) << c.dump();
+    EXPECT_EQ(c["non_finite"], 0) << c.dump();
+  }
+  const std::string table = Slurp(log);
+  for (const char* name :
+       {"expansion angles up to 90 degrees", "panorama seam and poles",
+        "degenerate covariances", "very near and very far geometry",
+        "scaled by 1e-3", "scaled by 1e3", "static-camera video"}) {
+    EXPECT_NE(table.find(name), std::string::npos) << name << "\n" << table;
+  }
+}
+
 }  // namespace
 }  // namespace pano4d
