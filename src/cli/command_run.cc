@@ -180,6 +180,7 @@ int RunPipeline(const RunCommandOptions& o, RunReport* report) {
       s.sfm.workspace = ws;
       s.sfm.video = o.video;
       s.sfm.images = o.images;
+      s.sfm.max_size = o.max_size;
       s.dataset = o.dataset.string();
       RunSfmCommand(s);
       return std::string("done");
@@ -288,6 +289,10 @@ void AddRunCommand(CLI::App& app, Action* action) {
   sub->add_option("--holdout", o->holdout,
                   "Video or images: hold out every N-th frame for "
                   "validation PSNR (0: none)")
+      ->capture_default_str();
+  sub->add_option("--max-size", o->max_size,
+                  "Video or images: resize the frames to this longest side "
+                  "in pixels before SfM (0: as they are)")
       ->capture_default_str();
   sub->add_flag("--no-expansion", o->fit.no_expansion,
                 "Leave the panoramic expansion out");

@@ -89,7 +89,9 @@ StageDecision Expansion(const PlanFacts& f) {
 
 StageDecision Eval(const PlanFacts& f) {
   if (!f.ground_truth) {
-    return {"eval", false, false, "no ground truth (no validation frames)"};
+    return {"eval", false, false,
+            "no ground truth: DyCheck metrics need a dataset's validation "
+            "frames (held-out frames of a video get PSNR in the fit)"};
   }
   if (!f.eval_requested) {
     return {"eval", false, false,

@@ -43,14 +43,21 @@ std::string Slurp(const fs::path& path) {
   return s.str();
 }
 
-TEST(FitRealDataTest, LadyRunningThroughSfmDepthAndFitWithHeldOutFrames) {
+// The real capture and COLMAP, or a loud skip.
+class FitRealDataTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!FindOnPath("colmap"))
+      GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH";
+    if (!fs::exists(video))
+      GTEST_SKIP() << "REAL DATA MISSING: " << video
+                   << " (set PANO4D_DATA_DIR to the folder of real captures)";
+  }
   const fs::path video =
       fs::path(PANO4D_DATA_DIR) / "real" / "lady-running.mp4";
-  if (!FindOnPath("colmap"))
-    GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH";
-  if (!fs::exists(video))
-    GTEST_SKIP() << "REAL DATA MISSING: " << video
-                 << " (set PANO4D_DATA_DIR to the folder of real captures)";
+};
+
+TEST_F(FitRealDataTest, LadyRunningThroughSfmDepthAndFitWithHeldOutFrames) {
   testing::TempDir dir;
   const fs::path ws = dir / "ws";
   const std::string w = Quote(ws);
@@ -90,6 +97,42 @@ TEST(FitRealDataTest, LadyRunningThroughSfmDepthAndFitWithHeldOutFrames) {
   EXPECT_GT(train_psnr, 20.0);
   EXPECT_GT(val_psnr, 18.0);
   EXPECT_LT(val_psnr, train_psnr);
+}
+
+// `pano4d run` on the real capture: the plan (SfM, stereo depth, motion,
+// expansion: no validation cameras, so the expansion's own trajectories are
+// the targets), renders of the expanded views in the report, and the
+// held-out PSNR.
+TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
+  testing::TempDir dir;
+  const fs::path ws = dir / "ws";
+  ASSERT_EQ(
+      RunPano4d("run --video " + Quote(video) + " --workspace " + Quote(ws) +
+                    " --max-size 480 --holdout 8 --iterations 1000 "
+                    "--expand-every 400 --validate-every 500",
+                dir / "run.log"),
+      0)
+      << Slurp(dir / "run.log");
+  const std::string log = Slurp(dir / "run.log");
+  EXPECT_NE(log.find("pano4d plan (video"), std::string::npos) << log;
+  const nlohmann::json plan =
+      nlohmann::json::parse(Slurp(ws / "pano4d/plan.json"));
+  for (const auto& s : plan.at("stages")) {
+    if (s.at("stage") == "eval") {
+      EXPECT_FALSE(s.at("run").get<bool>());
+    } else {
+      EXPECT_TRUE(s.at("run").get<bool>()) << s.dump();
+    }
+  }
+  EXPECT_TRUE(fs::exists(ws / "report/expanded_sheet.png"));
+  EXPECT_TRUE(fs::exists(ws / "report/index.md"));
+  const nlohmann::json fit =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  const double val_psnr = fit.at("metrics").at("psnr").get<double>();
+  std::printf("lady-running via run: held-out PSNR %.2f dB, %.0f s\n", val_psnr,
+              fit.at("seconds").at("total").get<double>());
+  EXPECT_GT(val_psnr, 16.0);
+  EXPECT_FALSE(fit.at("expansion").at("steps").empty());
 }
 
 }  // namespace
