@@ -13,21 +13,6 @@
 
 namespace pano4d::cli {
 
-void AddPlannedCommand(CLI::App& parent, const std::string& path,
-                       const std::string& description, Action* action) {
-  CLI::App* sub =
-      parent.add_subcommand(path.substr(path.rfind(' ') + 1), description);
-  sub->allow_extras();
-  sub->footer("Not built yet in this version of pano4d.");
-  sub->callback([action, path] {
-    *action = [path] {
-      std::cerr << "pano4d " << path << ": not built yet in pano4d " << kVersion
-                << " (see README.md, \"Status\")\n";
-      return kExitNotBuilt;
-    };
-  });
-}
-
 int Main(int argc, char** argv) {
   CLI::App app{
       "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen "
@@ -37,9 +22,8 @@ int Main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("pano4d ") + kVersion);
   app.require_subcommand(0, 1);
   app.footer(
-      "Exit status: 0 ok, 1 error (the message names the input), 2 not built "
-      "yet, "
-      "64 usage error.");
+      "Exit status: 0 ok, 1 error (the message names the input), 64 usage "
+      "error.");
 
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "debug, info, warning or error")

@@ -12,9 +12,8 @@ namespace pano4d::cli {
 // Exit statuses of the pano4d binary.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitError = 1,     // bad input, a failed step: the message names the input
-  kExitNotBuilt = 2,  // the subcommand exists in the plan but not in this build
-  kExitUsage = 64,    // unknown flag, missing argument (sysexits' EX_USAGE)
+  kExitError = 1,   // bad input, a failed step: the message names the input
+  kExitUsage = 64,  // unknown flag, missing argument (sysexits' EX_USAGE)
 };
 
 // Parses argv, runs the chosen subcommand, and turns errors into one line on
@@ -25,15 +24,10 @@ int Main(int argc, char** argv);
 // the function to run here, and Main runs it after parsing succeeds.
 using Action = std::function<int()>;
 
-// A subcommand of `parent` that the plan has but this build does not: it
-// accepts any flags, and running it prints one line and exits with
-// kExitNotBuilt. `path` names it in that line ("sfm", "bench render").
-void AddPlannedCommand(CLI::App& parent, const std::string& path,
-                       const std::string& description, Action* action);
-
 void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);
 void AddBenchStability(CLI::App& bench, Action* action);
+void AddBenchBudget(CLI::App& bench, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);

@@ -389,9 +389,7 @@ void AddBenchCommand(CLI::App& app, Action* action) {
 
   AddBenchRender(*bench, action);
   AddBenchStability(*bench, action);
-  AddPlannedCommand(*bench, "bench budget",
-                    "PSNR/mPSNR/uPSNR against wall time across budgets",
-                    action);
+  AddBenchBudget(*bench, action);
 }
 
 }  // namespace pano4d::cli

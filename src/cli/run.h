@@ -17,8 +17,8 @@ struct RunCommandOptions {
   std::filesystem::path video, images, colmap, dataset;
   std::filesystem::path workspace;
   bool eval = false;
-  int factor = 2;   // a dataset's resolution divisor
-  int holdout = 0;  // video/images: every N-th frame held out (0: none)
+  int factor = 2;    // a dataset's resolution divisor
+  int holdout = 0;   // video/images: every N-th frame held out (0: none)
   int max_size = 0;  // video/images: longest side for SfM (0: as is)
   // The fit's options (no_motion and no_expansion are the user's word; the
   // plan may leave more out).

@@ -59,15 +59,6 @@ TEST(CliTest, VersionAndHelp) {
   EXPECT_EQ(bare.status, kExitUsage);
 }
 
-TEST(CliTest, PlannedSubcommandsSayNotBuiltInOneLineAndExitTwo) {
-  for (const char* name : {"budget"}) {
-    const Result r = RunCli({"bench", name, "--workspace", "ws"});
-    EXPECT_EQ(r.status, kExitNotBuilt) << name;
-    EXPECT_EQ(Lines(r.err), 1) << r.err;
-    EXPECT_NE(r.err.find("not built yet"), std::string::npos) << r.err;
-  }
-}
-
 TEST(CliTest, UsageErrorsExitSixtyFour) {
   EXPECT_EQ(RunCli({"--no-such-flag"}).status, kExitUsage);
   EXPECT_EQ(RunCli({"inspect"}).status, kExitUsage);  // missing path

@@ -3,6 +3,7 @@
 // its errors.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -301,6 +302,29 @@ TEST_F(RunBinaryTest, StabilitySuiteFindsNoNonFiniteValue) {
         "scaled by 1e-3", "scaled by 1e3", "static-camera video"}) {
     EXPECT_NE(table.find(name), std::string::npos) << name << "\n" << table;
   }
+}
+
+// Error against run time across budgets, on the tiny scene with two small
+// budgets: a row per run, a CSV and plot per resolution; a second call
+// reads the finished runs back.
+TEST_F(RunBinaryTest, BudgetBenchTabulatesEveryRun) {
+  const fs::path ws = dir_->path() / "budget";
+  const fs::path log = dir_->path() / "budget.log";
+  const std::string args =
+      "bench budget --preset tiny --iterations 20,40 "
+      "--factors 2 --workspace '" +
+      ws.string() + "'";
+  ASSERT_EQ(RunPano4d(args, log), 0) << Slurp(log);
+  const std::string table = Slurp(ws / "budget.md");
+  EXPECT_NE(table.find("| 2x | 20 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| 2x | 40 |"), std::string::npos) << table;
+  EXPECT_GT(fs::file_size(ws / "budget_2x.png"), 1000u);
+  const std::string csv = Slurp(ws / "budget_2x.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
+  const auto fitted = fs::last_write_time(ws / "f2_i40/pano4d/fit.json");
+  ASSERT_EQ(RunPano4d(args, log), 0) << Slurp(log);
+  EXPECT_EQ(fs::last_write_time(ws / "f2_i40/pano4d/fit.json"), fitted);
+  EXPECT_EQ(Slurp(ws / "budget.md"), table);
 }
 
 }  // namespace
