@@ -66,7 +66,8 @@ std::string Cell(const std::optional<double>& v) {
 BudgetRow Fit(const BudgetOptions& o, const fs::path& dataset, int factor,
               int iterations) {
   const fs::path ws = o.workspace / ("f" + std::to_string(factor) + "_i" +
-                                     std::to_string(iterations));
+                                     std::to_string(iterations) +
+                                     (o.no_expansion ? "_no_expansion" : ""));
   const fs::path fit_json = ws / "pano4d" / "fit.json";
   bool done = false;
   if (fs::exists(fit_json)) {
@@ -128,12 +129,10 @@ int RunBenchBudget(const BudgetOptions& o) {
   }
   EnsureDirectory(o.workspace);
   const fs::path dataset = o.workspace / "dataset";
-  if (!fs::exists(dataset / "synth.json")) {
-    SynthCommandOptions s;
-    s.synth.preset = o.preset;
-    s.out = dataset.string();
-    RunSynth(s);
-  }
+  SynthCommandOptions s;
+  s.synth.preset = o.preset;
+  s.out = dataset.string();
+  EnsureSynthScene(s);
   std::vector<BudgetRow> rows;
   for (int factor : o.factors)
     for (int iterations : o.iterations)

@@ -57,7 +57,7 @@ struct Count {
   }
   void Add(const cv::Mat& m) {
     cv::Mat d;
-    m.convertTo(d, CV_64F);
+    (m.isContinuous() ? m : m.clone()).reshape(1).convertTo(d, CV_64F);
     for (auto it = d.begin<double>(); it != d.end<double>(); ++it) Add(*it);
   }
   void Add(const GaussianModel& g) {
@@ -237,13 +237,14 @@ CaseResult ExpansionAngles() {
       depth.at<float>(y, x) = box ? 2.0f : 4.0f + 0.01f * y;
     }
   const Eigen::Vector3d center(0, 0, 4);
+  double drift = 0;  // over every angle
   for (double alpha : {15.0, 30.0, 45.0, 60.0, 75.0, 90.0}) {
     ExpansionGeometry g;
     g.steps = 1;
     g.alpha_degrees = alpha;
     const std::vector<ExpandedView> views =
         ExpansionViews(g, source, center, {source}, {0}, 1);
-    double holes = 0, drift = 0;
+    double holes = 0;
     for (const ExpandedView& v : views) {
       c.count.Add(std::vector<float>(v.camera.rotation.data(),
                                      v.camera.rotation.data() + 9));

@@ -40,18 +40,11 @@ int RunDemo(const DemoOptions& o) {
   }
   Timer total;
   const fs::path dataset = o.workspace / "dataset";
-  if (!fs::exists(dataset / "synth.json")) {
-    SynthCommandOptions s;
-    s.synth.preset = o.preset;
-    s.synth.seed = o.seed;
-    s.out = dataset.string();
-    RunSynth(s);
-  } else {
-    std::printf(
-        "pano4d demo: the synthetic scene in %s is from an earlier "
-        "run\n",
-        dataset.c_str());
-  }
+  SynthCommandOptions s;
+  s.synth.preset = o.preset;
+  s.synth.seed = o.seed;
+  s.out = dataset.string();
+  EnsureSynthScene(s);
   RunCommandOptions r;
   r.dataset = dataset;
   r.workspace = o.workspace;

@@ -86,6 +86,15 @@ void AdoptColmapWorkspace(const fs::path& ws) {
               "mapper and image_undistorter, or `pano4d run --video`");
 }
 
+// What a fit in the workspace was asked for: a later run with other
+// options fits again from the start instead of resuming or reusing it.
+nlohmann::json FitFingerprint(const FitCommandOptions& f) {
+  return {
+      {"iterations", f.trainer.iterations}, {"seed", f.seed},
+      {"no_motion", f.no_motion},           {"no_expansion", f.no_expansion},
+      {"expansion", f.expansion.ToJson()},  {"prior_cmd", f.prior_cmd}};
+}
+
 // Whether fit.json says a fit of `iterations` finished.
 bool FitComplete(const fs::path& ws, int iterations) {
   const fs::path path = ws / "pano4d" / "fit.json";
@@ -93,6 +102,18 @@ bool FitComplete(const fs::path& ws, int iterations) {
   const nlohmann::json j = ReadJson(path);
   return j.value("iterations", 0) >= iterations &&
          !j.value("stopped_by_time_budget", false);
+}
+
+// Whether frames.json was listed from this input: a dataset at the same
+// path and factor, or (video, images, COLMAP) any, since `pano4d depth`
+// writes it last.
+bool FramesFromThisInput(const fs::path& ws, const RunCommandOptions& o) {
+  if (!fs::exists(FramesPath(ws))) return false;
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
+  if (o.dataset.empty()) return true;
+  return frames.dataset_factor == o.factor &&
+         fs::weakly_canonical(frames.dataset) ==
+             fs::weakly_canonical(o.dataset);
 }
 
 struct StageLog {
@@ -187,12 +208,8 @@ int RunPipeline(const RunCommandOptions& o, RunReport* report) {
     });
   }
   stage("depth", [&] {
-    if (fs::exists(FramesPath(ws))) {
-      bool complete = true;
-      for (const WorkspaceFrame& f : ReadWorkspaceFrames(ws).train)
-        complete = complete && !f.depth.empty();
-      if (complete) return std::string("complete from an earlier run");
-    }
+    if (FramesFromThisInput(ws, o))
+      return std::string("complete from an earlier run");
     DepthCommandOptions d;
     d.workspace = ws;
     d.factor = o.factor;
@@ -213,9 +230,19 @@ int RunPipeline(const RunCommandOptions& o, RunReport* report) {
     f.workspace = ws;
     f.no_motion = !plan.Runs("motion");
     f.no_expansion = !plan.Runs("expansion");
-    if (FitComplete(ws, f.trainer.iterations))
+    const fs::path stamp = ws / "pano4d" / "run_fit.json";
+    const bool same = fs::exists(stamp) && ReadJson(stamp) == FitFingerprint(f);
+    if (same && FitComplete(ws, f.trainer.iterations))
       return std::string("complete from an earlier run");
-    f.resume = true;
+    if (!same && fs::exists(stamp)) {
+      PANO4D_LOG(kInfo) << "run: fit: the workspace's fit had other options ("
+                        << stamp.string() << "); fitting from the start";
+      // Its expansion products would otherwise be reported as this fit's.
+      fs::remove_all(ws / "pano4d" / "expansion");
+      fs::remove_all(ws / "pano4d" / "panorama");
+    }
+    WriteJson(stamp, FitFingerprint(f));
+    f.resume = same;
     RunFitCommand(f);
     return std::string("done");
   });

@@ -1,6 +1,7 @@
 // pano4d synth: a synthetic dynamic scene with exact ground truth, written in
 // the DyCheck iPhone layout.
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -10,6 +11,8 @@
 #include "evaluation/synth_generate.h"
 #include "src/cli/app.h"
 #include "src/cli/stages.h"
+#include "src/core/error.h"
+#include "src/core/json.h"
 #include "src/core/timer.h"
 
 namespace pano4d::cli {
@@ -31,6 +34,29 @@ int RunSynth(const SynthCommandOptions& options) {
       s.render_seconds, s.covisibility_seconds, s.write_seconds,
       100.0 * s.unseen_fraction, s.covisibility_threshold);
   return kExitOk;
+}
+
+void EnsureSynthScene(const SynthCommandOptions& o) {
+  const std::filesystem::path json =
+      std::filesystem::path(o.out) / "synth.json";
+  if (!std::filesystem::exists(json)) {
+    RunSynth(o);
+    return;
+  }
+  const Json j = ReadJson(json);
+  const std::string preset = GetJson<std::string>(j, "preset", json.string());
+  const int seed = GetJson<int>(j, "seed", json.string());
+  const bool is_static = GetJsonOr<bool>(j, "static", false, json.string());
+  if (preset != o.synth.preset || seed != static_cast<int>(o.synth.seed) ||
+      is_static != o.synth.is_static) {
+    throw Error(json.string(), "preset/seed",
+                preset + " seed " + std::to_string(seed),
+                "an earlier run made another scene here; use another "
+                "--workspace or remove " +
+                    o.out);
+  }
+  std::printf("pano4d: the synthetic scene in %s is from an earlier run\n",
+              o.out.c_str());
 }
 
 void AddSynthCommand(CLI::App& app, Action* action) {

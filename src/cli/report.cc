@@ -291,13 +291,19 @@ ReportSummary WriteReport(const fs::path& ws) {
      << fit.value("dynamic_gaussians", 0) << " dynamic Gaussians.\n\n";
   md << "## Stages\n\n" << PlanTable(plan) << "\n";
   if (evaluated) {
-    md << "## Metrics (beside the paper's DyCheck rows)\n\n"
-       << "Reproduce with `pano4d eval --dataset "
-       << plan.at("input").value("path", "") << " --renders "
-       << (p4d / "renders" / "val").string()
-       << "`. The paper's rows are its numbers on DyCheck's real iPhone "
-          "captures; this scene is synthetic, so compare the pattern across "
-          "the columns (full, covisible m*, unseen u*), not the values.\n\n";
+    md << "## Metrics (beside the paper's DyCheck rows)\n\n";
+    if (!frames.dataset.empty()) {
+      md << "Reproduce with `pano4d eval --dataset " << frames.dataset.string()
+         << " --factor " << frames.dataset_factor << " --renders "
+         << (p4d / "renders" / "val").string() << "`. ";
+    }
+    md << "The paper's rows are its numbers on DyCheck's real iPhone "
+          "captures";
+    if (fs::exists(frames.dataset / "synth.json")) {
+      md << "; this scene is synthetic, so compare the pattern across the "
+            "columns (full, covisible m*, unseen u*), not the values";
+    }
+    md << ".\n\n";
     std::string table = Slurp(summary.dir / "metrics.md");
     if (table.rfind("# ", 0) == 0) table = table.substr(table.find('\n') + 1);
     md << table << "\n";

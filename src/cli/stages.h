@@ -22,6 +22,9 @@ struct SynthCommandOptions {
   std::string out;
 };
 int RunSynth(const SynthCommandOptions& options);
+// Generates the scene in `out` unless an earlier run did; an earlier scene
+// of another preset or seed is an Error naming its synth.json.
+void EnsureSynthScene(const SynthCommandOptions& options);
 
 struct SfmCommandOptions {
   SfmOptions sfm;

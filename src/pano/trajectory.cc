@@ -148,7 +148,7 @@ nlohmann::json ToJson(const ExpandedView& view) {
 }
 
 RasterCamera RasterCameraFromJson(const nlohmann::json& j,
-                            const std::string& source) {
+                                  const std::string& source) {
   if (!j.is_object()) {
     throw Error(source, "camera", j.dump(), "expected an object");
   }
@@ -247,7 +247,7 @@ std::vector<TimedCamera> ReadCameraFile(const std::string& path) {
       throw Error(source, "camera", "", "missing");
     }
     out.push_back({RasterCameraFromJson(views[i].at("camera"), source),
-                   views[i].value("t", 0)});
+                   GetJsonOr<int>(views[i], "t", 0, source)});
   }
   return out;
 }

@@ -116,6 +116,18 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
   EXPECT_EQ(again["results"]["depth"]["status"],
             "complete from an earlier run");
   EXPECT_EQ(again["results"]["fit"]["status"], "complete from an earlier run");
+
+  // Other fit options: fitted again from the start, not reused.
+  ASSERT_EQ(RunPano4d("run --dataset '" + (dir_->path() / "tiny").string() +
+                          "' --workspace '" + ws.string() + "' --no-expansion" +
+                          kShortFit,
+                      log),
+            0)
+      << Slurp(log);
+  EXPECT_EQ(ReadJsonFile(ws / "pano4d/plan.json")["results"]["fit"]["status"],
+            "done");
+  EXPECT_TRUE(ReadJsonFile(ws / "pano4d/fit.json")["expansion"].is_null());
+  EXPECT_FALSE(fs::exists(ws / "pano4d/expansion"));
 }
 
 TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
