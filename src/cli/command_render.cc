@@ -39,12 +39,6 @@ struct RenderCommandOptions {
   fs::path out;  // default WS/pano4d/renders/<trajectory>
 };
 
-std::string Padded(int value) {
-  char b[16];
-  std::snprintf(b, sizeof(b), "%05d", value);
-  return b;
-}
-
 int RunRender(const RenderCommandOptions& o) {
   const FittedWorkspace fitted = LoadFittedWorkspace(o.workspace);
   const int num_times = fitted.scene.num_times;
@@ -97,7 +91,7 @@ int RunRender(const RenderCommandOptions& o) {
   nlohmann::json views = nlohmann::json::array();
   for (std::size_t i = 0; i < cameras.size(); ++i) {
     frames.push_back(renderer.Render(cameras[i].camera, cameras[i].time));
-    WriteImage(out / (Padded(static_cast<int>(i)) + ".png"),
+    WriteImage(out / (Padded(static_cast<int>(i), 5) + ".png"),
                Image::FromOpenCV(frames.back(), name));
     views.push_back(
         {{"camera", CameraToJson(cameras[i].camera)}, {"t", cameras[i].time}});
@@ -135,7 +129,7 @@ int RunExport(const ExportCommandOptions& o) {
     ProgressBar bar("export ply", scene.num_times);
     for (int t = 0; t < scene.num_times; ++t) {
       scene.ComposeAt(t, &posed);
-      WritePly(out / "ply" / ("t_" + Padded(t) + ".ply"), posed);
+      WritePly(out / "ply" / ("t_" + Padded(t, 5) + ".ply"), posed);
       ++written;
       bar.Add();
     }

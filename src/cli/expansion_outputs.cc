@@ -14,13 +14,14 @@
 #include "src/render/panorama.h"
 
 namespace pano4d::cli {
-namespace {
 
 std::string Padded(int value, int width) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%0*d", width, value);
   return buffer;
 }
+
+namespace {
 
 void AddImage(const RasterCamera& c, const std::string& name,
               ColmapModel* model) {

@@ -21,6 +21,10 @@ class App;
 
 namespace pano4d::cli {
 
+// `value` with leading zeros to `width` digits: file names that sort (5:
+// frames and times, 2: expansion steps).
+std::string Padded(int value, int width);
+
 // The flags both commands take: --directions, --expansion-steps, --alpha,
 // --expansion-stride, --planar-expansion, --prior-cmd, --panorama-width.
 void AddExpansionFlags(CLI::App* sub, ExpansionOptions* options,

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -221,13 +220,6 @@ std::string PlanTable(const nlohmann::json& plan) {
   return s.str();
 }
 
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 }  // namespace
 
 ReportSummary WriteReport(const fs::path& ws) {
@@ -304,7 +296,7 @@ ReportSummary WriteReport(const fs::path& ws) {
             "columns (full, covisible m*, unseen u*), not the values";
     }
     md << ".\n\n";
-    std::string table = Slurp(summary.dir / "metrics.md");
+    std::string table = ReadTextFile(summary.dir / "metrics.md");
     if (table.rfind("# ", 0) == 0) table = table.substr(table.find('\n') + 1);
     md << table << "\n";
   }

@@ -73,7 +73,7 @@ nlohmann::json CameraToJson(const RasterCamera& camera);
 // The inverse of CameraToJson. Throws pano4d::Error naming `source` and the
 // field that is missing, of the wrong type or out of range.
 RasterCamera RasterCameraFromJson(const nlohmann::json& json,
-                            const std::string& source);
+                                  const std::string& source);
 
 // Novel-view videos (`pano4d render`): cameras moved about `center` from
 // `reference` (its intrinsics kept), each with the time it shows.
@@ -89,10 +89,11 @@ enum class VideoPath {
 struct VideoPathOptions {
   VideoPath path = VideoPath::kOrbit;
   int frames = 60;
-  double degrees = 360.0;  // orbit: the arc; spiral: the radius; bullet: the swing
-  int num_times = 1;       // times run 0..num_times-1 over the video
-  int time = 0;            // bullet time
-  void Check() const;      // throws pano4d::Error naming the field
+  double degrees =
+      360.0;           // orbit: the arc; spiral: the radius; bullet: the swing
+  int num_times = 1;   // times run 0..num_times-1 over the video
+  int time = 0;        // bullet time
+  void Check() const;  // throws pano4d::Error naming the field
 };
 // Up is the reference camera's -y. Frame 0 of orbit and spiral is the
 // reference camera rotated by 0 (orbit) or `degrees` about the right axis

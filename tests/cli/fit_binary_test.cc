@@ -25,21 +25,12 @@ extern char** environ;
 namespace pano4d {
 namespace {
 namespace fs = std::filesystem;
+using testing::Slurp;
 
 const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
 
 int RunPano4d(const std::string& args, const fs::path& log) {
-  const std::string command =
-      kBinary + " " + args + " > '" + log.string() + "' 2>&1";
-  const int raw = std::system(command.c_str());
-  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-}
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return testing::RunLogged(kBinary + " " + args, log);
 }
 
 class FitBinaryTest : public ::testing::Test {

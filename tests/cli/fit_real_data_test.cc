@@ -19,12 +19,11 @@
 namespace pano4d {
 namespace {
 namespace fs = std::filesystem;
+using testing::Slurp;
 
 int RunPano4d(const std::string& args, const fs::path& log) {
-  const std::string command = std::string(PANO4D_BINARY_DIR) + "/pano4d " +
-                              args + " > '" + log.string() + "' 2>&1";
-  const int raw = std::system(command.c_str());
-  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return testing::RunLogged(std::string(PANO4D_BINARY_DIR) + "/pano4d " + args,
+                            log);
 }
 
 // 'path', for a shell (built with +=: GCC 12 warns falsely on
@@ -34,13 +33,6 @@ std::string Quote(const fs::path& path) {
   q += path.string();
   q += "'";
   return q;
-}
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // The real capture and COLMAP, or a loud skip.

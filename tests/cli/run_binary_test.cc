@@ -1,14 +1,11 @@
 // `pano4d run` as a user runs it on the tiny synthetic scene: the plan it
 // prints and writes, the stages it leaves out (and why), resuming, and
 // its errors.
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -19,21 +16,12 @@
 namespace pano4d {
 namespace {
 namespace fs = std::filesystem;
+using testing::Slurp;
 
 const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
 
 int RunPano4d(const std::string& args, const fs::path& log) {
-  const std::string command =
-      kBinary + " " + args + " > '" + log.string() + "' 2>&1";
-  const int raw = std::system(command.c_str());
-  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-}
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return testing::RunLogged(kBinary + " " + args, log);
 }
 
 nlohmann::json ReadJsonFile(const fs::path& path) {

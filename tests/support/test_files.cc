@@ -1,7 +1,11 @@
 #include "tests/support/test_files.h"
 
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include "src/core/file.h"
 #include "src/core/image.h"
@@ -32,6 +36,19 @@ void WriteTruncatedPng(const std::filesystem::path& path) {
 
 void WriteText(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
+}
+
+std::string Slurp(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int RunLogged(const std::string& command, const std::filesystem::path& log) {
+  const int raw =
+      std::system((command + " > '" + log.string() + "' 2>&1").c_str());
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
 }
 
 }  // namespace pano4d::testing

@@ -22,5 +22,11 @@ class TempDir {
 // Writes a small valid PNG, then cuts it to half its size.
 void WriteTruncatedPng(const std::filesystem::path& path);
 void WriteText(const std::filesystem::path& path, const std::string& text);
+// The file's bytes; empty when it cannot be read (a log a failed command
+// did not write).
+std::string Slurp(const std::filesystem::path& path);
+// Runs `command` in a shell with stdout and stderr to `log`; returns its
+// exit status (-1 when it did not exit normally).
+int RunLogged(const std::string& command, const std::filesystem::path& log);
 
 }  // namespace pano4d::testing
