@@ -1,6 +1,7 @@
-// The real lady-running capture through sfm, depth (plane-sweep stereo) and
-// fit, every 8th frame held out (labels real-data and colmap; says REAL
-// DATA MISSING or COLMAP MISSING and skips when its input is absent).
+// The real lady-running capture through `pano4d run` (sfm, plane-sweep
+// depth, fit and expansion), every 8th frame held out (labels real-data and
+// colmap; says REAL DATA MISSING or COLMAP MISSING and skips when its input is
+// absent).
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -49,52 +50,12 @@ class FitRealDataTest : public ::testing::Test {
       fs::path(PANO4D_DATA_DIR) / "real" / "lady-running.mp4";
 };
 
-TEST_F(FitRealDataTest, LadyRunningThroughSfmDepthAndFitWithHeldOutFrames) {
-  testing::TempDir dir;
-  const fs::path ws = dir / "ws";
-  const std::string w = Quote(ws);
-  ASSERT_EQ(RunPano4d("sfm --video " + Quote(video) + " --workspace " + w +
-                          " --max-size 480",
-                      dir / "sfm.log"),
-            0)
-      << Slurp(dir / "sfm.log");
-  ASSERT_EQ(
-      RunPano4d("depth --workspace " + w + " --holdout 8", dir / "depth.log"),
-      0)
-      << Slurp(dir / "depth.log");
-  ASSERT_EQ(RunPano4d("fit --workspace " + w +
-                          " --iterations 1000 --validate-every 500",
-                      dir / "fit.log"),
-            0)
-      << Slurp(dir / "fit.log");
-  const nlohmann::json frames =
-      nlohmann::json::parse(Slurp(ws / "pano4d/frames.json"));
-  const nlohmann::json fit =
-      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
-  const std::size_t held_out = frames.at("val").size();
-  const double train_psnr = fit.at("train_psnr").get<double>();
-  const double val_psnr = fit.at("metrics").at("psnr").get<double>();
-  std::printf(
-      "lady-running: %zu training and %zu held-out frames; %d static and %d "
-      "dynamic Gaussians; training PSNR %.2f dB, held-out PSNR %.2f dB, "
-      "%.0f s of fitting\n",
-      frames.at("train").size(), held_out,
-      fit.at("static_gaussians").get<int>(),
-      fit.at("dynamic_gaussians").get<int>(), train_psnr, val_psnr,
-      fit.at("seconds").at("total").get<double>());
-  // 65 frames: 0, 8, ..., 64 held out.
-  EXPECT_EQ(held_out, 9u);
-  EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
-  // Measured (2 cores, 1000 iterations): training 22.3 dB, held out 21.2.
-  EXPECT_GT(train_psnr, 20.0);
-  EXPECT_GT(val_psnr, 18.0);
-  EXPECT_LT(val_psnr, train_psnr);
-}
-
-// `pano4d run` on the real capture: the plan (SfM, stereo depth, motion,
-// expansion: no validation cameras, so the expansion's own trajectories are
-// the targets), renders of the expanded views in the report, and the
-// held-out PSNR.
+// `pano4d run` on the real capture, every 8th frame held out: the plan
+// (SfM, plane-sweep depth, motion, fit and expansion run; eval is left out,
+// since a video has no DyCheck ground truth), renders of the expanded views
+// in the report, and the held-out PSNR. One run covers the fit issue's
+// "through sfm, depth and fit" too: a second pipeline on the same video
+// would double the slowest test of the suite (CI has 2 cores).
 TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
   testing::TempDir dir;
   const fs::path ws = dir / "ws";
@@ -118,13 +79,30 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
   }
   EXPECT_TRUE(fs::exists(ws / "report/expanded_sheet.png"));
   EXPECT_TRUE(fs::exists(ws / "report/index.md"));
+  const nlohmann::json frames =
+      nlohmann::json::parse(Slurp(ws / "pano4d/frames.json"));
   const nlohmann::json fit =
       nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  const std::size_t held_out = frames.at("val").size();
+  const double train_psnr = fit.at("train_psnr").get<double>();
   const double val_psnr = fit.at("metrics").at("psnr").get<double>();
-  std::printf("lady-running via run: held-out PSNR %.2f dB, %.0f s\n", val_psnr,
-              fit.at("seconds").at("total").get<double>());
-  EXPECT_GT(val_psnr, 16.0);
+  std::printf(
+      "lady-running via run: %zu training and %zu held-out frames; %d static "
+      "and %d dynamic Gaussians; training PSNR %.2f dB, held-out PSNR %.2f "
+      "dB, %.0f s of fitting\n",
+      frames.at("train").size(), held_out,
+      fit.at("static_gaussians").get<int>(),
+      fit.at("dynamic_gaussians").get<int>(), train_psnr, val_psnr,
+      fit.at("seconds").at("total").get<double>());
+  // 65 frames: 0, 8, ..., 64 held out.
+  EXPECT_EQ(held_out, 9u);
+  EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
   EXPECT_FALSE(fit.at("expansion").at("steps").empty());
+  // Measured (2 cores, 1000 iterations, an expansion every 400): held out
+  // 21.66 dB; without expansion, training 22.3 and held out 21.2.
+  EXPECT_GT(train_psnr, 20.0);
+  EXPECT_GT(val_psnr, 18.0);
+  EXPECT_LT(val_psnr, train_psnr);
 }
 
 }  // namespace
