@@ -178,6 +178,35 @@ std::string Format(const std::optional<double>& v, const char* unit = "") {
 
 }  // namespace
 
+namespace {
+
+// The rasterizer culls what is nearer than kNearPlane (world units); a
+// scene whose median depth is within this factor of it loses geometry (the
+// tiny scene scaled by 1e-3 in `pano4d bench stability` learns nothing).
+constexpr double kNearPlaneMargin = 100.0;
+
+void WarnIfNearThePlane(const std::vector<TrainingView>& views) {
+  std::vector<float> depths;
+  for (const TrainingView& v : views)
+    for (std::size_t i = 0; i < v.depth.size(); i += 97)
+      if (v.depth[i] > 0) depths.push_back(v.depth[i]);
+  if (depths.empty()) return;
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2,
+                   depths.end());
+  const double median = depths[depths.size() / 2];
+  if (median < kNearPlaneMargin * kNearPlane) {
+    PANO4D_LOG(kWarning)
+        << "fit: the training depth's median is " << median
+        << " world units, within " << kNearPlaneMargin
+        << "x of the rasterizer's near plane " << kNearPlane
+        << ": Gaussians nearer than it are not drawn. Scale the scene up "
+           "(e.g. colmap model_transformer with a scale, then `pano4d depth` "
+           "again)";
+  }
+}
+
+}  // namespace
+
 int RunFitCommand(FitCommandOptions o) {
   if (o.deterministic && o.time_budget > 0) {
     throw Error("--time-budget", "", std::to_string(o.time_budget),
@@ -203,6 +232,7 @@ int RunFitCommand(FitCommandOptions o) {
                     << frames.val.size() << " validation frames ("
                     << frames.source << ")";
   std::vector<TrainingView> views = LoadTrainingViews(frames.train);
+  WarnIfNearThePlane(views);
   const std::vector<ValidationView> val = LoadValidation(frames.val);
 
   const bool resuming = o.resume && fs::exists(ckpt);

@@ -85,7 +85,7 @@ int RunRender(const RenderCommandOptions& o) {
   const fs::path out =
       o.out.empty() ? o.workspace / "pano4d" / "renders" / name : o.out;
   EnsureDirectory(out);
-  SceneRenderer renderer(fitted);
+  SceneRenderer renderer(fitted.scene);
   ProgressBar bar("render " + name, static_cast<std::int64_t>(cameras.size()));
   std::vector<cv::Mat> frames;
   nlohmann::json views = nlohmann::json::array();

@@ -163,7 +163,7 @@ void ExpandedViews(const fs::path& ws, const FittedWorkspace& fitted,
     throw Error(path.string(), "source", source,
                 "is not a training frame of frames.json");
   }
-  SceneRenderer renderer(fitted);
+  SceneRenderer renderer(fitted.scene);
   const cv::Mat source_view =
       renderer.Render(RasterCamera::FromPosed(frame->camera), frame->time);
   // [m][e]: the render at direction m, step e.

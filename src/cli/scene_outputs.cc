@@ -1,6 +1,5 @@
 #include "src/cli/scene_outputs.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -36,36 +35,6 @@ Eigen::Vector3d FittedWorkspace::Center() const {
   return MakePanoramaFrame(means, cameras).center;
 }
 
-double FittedWorkspace::Extent() const {
-  GaussianModel posed;
-  scene.ComposeAt(scene.canonical_time, &posed);
-  std::vector<RasterCamera> cameras;
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  for (const WorkspaceFrame& f : frames.train) {
-    cameras.push_back(RasterCamera::FromPosed(f.camera));
-    centroid += cameras.back().Center();
-  }
-  centroid /= static_cast<float>(cameras.size());
-  double radius = 0;
-  std::vector<float> depths;
-  for (const RasterCamera& camera : cameras) {
-    radius = std::max(radius, double((camera.Center() - centroid).norm()));
-    // Every 101st Gaussian is sample enough for a median.
-    for (std::size_t i = 0; i < posed.size(); i += 101) {
-      const Eigen::Vector3f mean = Eigen::Vector3f::Map(&posed.means[3 * i]);
-      const float z = (camera.rotation * mean + camera.translation).z();
-      if (z > 0) depths.push_back(z);
-    }
-  }
-  double median = 0;
-  if (!depths.empty()) {
-    std::nth_element(depths.begin(), depths.begin() + depths.size() / 2,
-                     depths.end());
-    median = depths[depths.size() / 2];
-  }
-  return SceneExtent(radius, median);
-}
-
 FittedWorkspace LoadFittedWorkspace(const fs::path& ws) {
   FittedWorkspace w;
   w.frames = ReadWorkspaceFrames(ws);
@@ -82,11 +51,6 @@ FittedWorkspace LoadFittedWorkspace(const fs::path& ws) {
   return w;
 }
 
-SceneRenderer::SceneRenderer(const FittedWorkspace& fitted)
-    : scene_(fitted.scene) {
-  settings_.near_plane = NearPlaneFor(fitted.Extent());
-}
-
 cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
   if (time < 0 || time >= scene_.num_times) {
     throw Error("render", "time", std::to_string(time),
@@ -97,7 +61,7 @@ cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
     scene_.ComposeAt(time, &posed_);
     posed_time_ = time;
   }
-  rasterizer_.Forward(posed_, camera, settings_, &out_);
+  rasterizer_.Forward(posed_, camera, RasterSettings{}, &out_);
   cv::Mat rgb(out_.height, out_.width, CV_32FC3);
   std::copy(out_.rgb.begin(), out_.rgb.end(), rgb.ptr<float>());
   for (float v : out_.rgb) {

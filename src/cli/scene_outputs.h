@@ -24,10 +24,6 @@ struct FittedWorkspace {
   const WorkspaceFrame& MiddleFrame() const;
   // The panorama frame's centre (the centroid of the Gaussians).
   Eigen::Vector3d Center() const;
-  // The scene's size as the fit measured it (SceneExtent), with the median
-  // depth of the Gaussians in the training cameras standing in for the
-  // depth maps': it sets the renders' near plane (NearPlaneFor).
-  double Extent() const;
 };
 
 // frames.json and the checkpoint of `pano4d fit`; throws pano4d::Error
@@ -37,12 +33,11 @@ FittedWorkspace LoadFittedWorkspace(const std::filesystem::path& workspace);
 // Renders the scene posed at `time` (checked against its times) as BGR8.
 class SceneRenderer {
  public:
-  explicit SceneRenderer(const FittedWorkspace& fitted);
+  explicit SceneRenderer(const GaussianScene& scene) : scene_(scene) {}
   cv::Mat Render(const RasterCamera& camera, int time);
 
  private:
   const GaussianScene& scene_;
-  RasterSettings settings_;
   Rasterizer rasterizer_;
   GaussianModel posed_;
   int posed_time_ = -1;

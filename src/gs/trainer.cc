@@ -188,6 +188,10 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
           "outside the scene's " + std::to_string(scene_.num_times) + " times");
     }
   }
+  // The scene extent scales position learning rates and the densification
+  // thresholds. 3DGS takes 1.1 x the cameras' radius; a video camera may
+  // barely move, so the median depth of the views bounds it from below (the
+  // size of what the cameras look at).
   Eigen::Vector3f mean_centre = Eigen::Vector3f::Zero();
   for (const TrainingView& v : views_) mean_centre += v.camera.Center();
   mean_centre /= static_cast<float>(views_.size());
@@ -212,7 +216,8 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
                      medians.end());
     depth_scale = medians[medians.size() / 2];
   }
-  extent_ = SceneExtent(radius, depth_scale);
+  extent_ = std::max(1.1 * radius, depth_scale);
+  if (!(extent_ > 0)) extent_ = 1.0;
   RegisterGroups();
   UpdateLearningRates();
   const std::size_t n = scene_.size();
@@ -259,15 +264,9 @@ void Trainer::UpdateLearningRates() {
   }
 }
 
-double SceneExtent(double camera_radius, double median_depth) {
-  const double extent = std::max(1.1 * camera_radius, median_depth);
-  return extent > 0 ? extent : 1.0;
-}
-
 RasterSettings Trainer::Settings() const {
   RasterSettings settings;
   settings.background = options_.background;
-  settings.near_plane = NearPlaneFor(extent_);
   return settings;
 }
 

@@ -112,13 +112,6 @@ struct PhaseTimes {
 // it is not a pano4d checkpoint, is truncated or holds non-finite values.
 GaussianScene ReadCheckpointScene(const std::filesystem::path& path);
 
-// The size of a scene (world units): 1.1 x the cameras' largest distance
-// from their centroid, as in 3DGS, but at least the median depth of what
-// they look at (a video camera may barely move); 1 when both are 0. It
-// scales the position learning rates, the densification thresholds and the
-// near plane (NearPlaneFor).
-double SceneExtent(double camera_radius, double median_depth);
-
 class Trainer {
  public:
   Trainer(GaussianScene scene, std::vector<TrainingView> views,

@@ -11,8 +11,7 @@ namespace pano4d {
 
 // Numeric guards of the rasterizer, as in 3D Gaussian splatting:
 // Points closer than this to the camera plane are culled: the EWA Jacobian
-// grows as 1/z^2. This is the near plane of a scene one unit or more in
-// size; smaller scenes use a proportionally nearer one (NearPlaneFor).
+// grows as 1/z^2.
 inline constexpr float kNearPlane = 0.01f;
 // Added to the 2D covariance: a pixel-sized low-pass so that a Gaussian
 // thinner than a pixel still covers one (anti-aliasing).
@@ -41,20 +40,9 @@ inline constexpr float kMaxRadius = 1e6f;
 inline constexpr float kMinAlphaForDepth = 1e-6f;
 inline constexpr int kTileSize = 16;
 
-// The near plane (camera z, world units) for a scene of the given extent:
-// kNearPlane for extents of 1 and more, kNearPlane x extent below, so that a
-// scene scaled by s < 1 culls what the same scene at unit size culls.
-// COLMAP's scale is arbitrary: a reconstruction whose depths are a few
-// thousandths would otherwise lie wholly inside a fixed near plane.
-inline float NearPlaneFor(double extent) {
-  return extent > 0 && extent < 1 ? static_cast<float>(kNearPlane * extent)
-                                  : kNearPlane;
-}
-
 template <typename T>
 struct RasterSettingsT {
   Eigen::Matrix<T, 3, 1> background = Eigen::Matrix<T, 3, 1>::Zero();
-  T near_plane = T(kNearPlane);  // culling distance, see NearPlaneFor
 };
 
 // What a forward pass produces: row-major images.
@@ -164,8 +152,7 @@ class RasterizerT {
   const RasterStats& stats() const { return stats_; }
 
  private:
-  void Project(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
-               T near_plane);
+  void Project(const GaussianModelT<T>& model, const RasterCameraT<T>& camera);
   void Bin(const RasterCameraT<T>& camera);
   void Blend(const RasterCameraT<T>& camera, const RasterSettingsT<T>& settings,
              RenderOutputT<T>* out);

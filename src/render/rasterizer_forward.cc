@@ -25,7 +25,7 @@ void ProjectedGaussiansT<T>::Resize(std::size_t n) {
 
 template <typename T>
 void RasterizerT<T>::Project(const GaussianModelT<T>& model,
-                             const RasterCameraT<T>& camera, T near_plane) {
+                             const RasterCameraT<T>& camera) {
   const std::size_t n = model.size();
   projected_.Resize(n);
   const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
@@ -43,7 +43,7 @@ void RasterizerT<T>::Project(const GaussianModelT<T>& model,
         model.means[3 * i], model.means[3 * i + 1], model.means[3 * i + 2]);
     const Eigen::Matrix<T, 3, 1> t =
         camera.rotation * mean + camera.translation;
-    if (!(t.z() > near_plane) || !t.allFinite()) continue;
+    if (!(t.z() > T(kNearPlane)) || !t.allFinite()) continue;
 
     // 3D covariance R S S^T R^T from the normalised quaternion and scales.
     Eigen::Matrix<T, 4, 1> q(model.quats[4 * i], model.quats[4 * i + 1],
@@ -328,11 +328,7 @@ void RasterizerT<T>::Forward(const GaussianModelT<T>& model,
         std::to_string(camera.width) + "x" + std::to_string(camera.height),
         "image size must be positive");
   }
-  if (!(settings.near_plane > 0)) {
-    throw Error("rasterizer", "near_plane", std::to_string(settings.near_plane),
-                "must be positive");
-  }
-  Project(model, camera, settings.near_plane);
+  Project(model, camera);
   Bin(camera);
   stats_.visible = static_cast<std::uint64_t>(
       std::count_if(projected_.radius.begin(), projected_.radius.end(),

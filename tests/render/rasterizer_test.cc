@@ -12,7 +12,6 @@
 #include <gtest/gtest.h>
 
 #include "src/core/camera.h"
-#include "src/core/error.h"
 
 namespace pano4d {
 namespace {
@@ -338,36 +337,6 @@ TEST(RasterizerTest, ManyGaussiansOnOnePixelSaturateIt) {
   EXPECT_GT(out.alpha[centre], 1.0f - 2e-4f);
   EXPECT_NEAR(out.rgb[3 * centre + 1], 0.9f, 1e-3f);
   EXPECT_NEAR(out.depth[centre], 2.0f, 1e-3f);
-}
-
-// A scene scaled by 1e-3 renders as the same scene at unit scale when its
-// near plane follows its size (NearPlaneFor), and is culled whole by the
-// unit scene's near plane.
-TEST(RasterizerTest, NearPlaneFollowsTheSceneSize) {
-  EXPECT_EQ(NearPlaneFor(5.0), kNearPlane);
-  EXPECT_EQ(NearPlaneFor(1.0), kNearPlane);
-  EXPECT_FLOAT_EQ(NearPlaneFor(1e-3), kNearPlane * 1e-3f);
-  EXPECT_EQ(NearPlaneFor(0.0), kNearPlane);
-  EXPECT_EQ(NearPlaneFor(std::nan("")), kNearPlane);
-
-  GaussianModel unit, tiny;
-  Add(&unit, {0.1f, -0.05f, 3.0f}, 0.2f, 0.8f, {1, 0.5f, 0});
-  Add(&tiny, {1e-4f, -5e-5f, 3e-3f}, 2e-4f, 0.8f, {1, 0.5f, 0});
-  RenderOutput reference, culled, drawn;
-  Rasterizer().Forward(unit, TestCamera(), {}, &reference);
-  Rasterizer().Forward(tiny, TestCamera(), {}, &culled);
-  RasterSettings scaled;
-  scaled.near_plane = NearPlaneFor(3e-3);
-  Rasterizer().Forward(tiny, TestCamera(), scaled, &drawn);
-  const std::size_t centre = 46 * 128 + 67;  // the Gaussian's pixel
-  EXPECT_GT(reference.alpha[centre], 0.5f);
-  EXPECT_EQ(culled.alpha[centre], 0.0f);
-  for (std::size_t i = 0; i < reference.alpha.size(); ++i)
-    ASSERT_NEAR(drawn.alpha[i], reference.alpha[i], 1e-4f) << i;
-  EXPECT_NEAR(drawn.depth[centre], 3e-3f, 1e-7f);
-
-  scaled.near_plane = 0;
-  EXPECT_THROW(Rasterizer().Forward(tiny, TestCamera(), scaled, &drawn), Error);
 }
 
 }  // namespace
