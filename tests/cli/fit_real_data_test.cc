@@ -2,13 +2,8 @@
 // depth, fit and expansion), every 8th frame held out (labels real-data and
 // colmap; says REAL DATA MISSING or COLMAP MISSING and skips when its input is
 // absent).
-#include <sys/wait.h>
-
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
