@@ -509,8 +509,9 @@ int RunFitCommand(FitCommandOptions o) {
     std::printf("  %-22s none (%s)\n", "expansion",
                 o.no_expansion ? "--no-expansion" : "run too short");
   }
-  std::printf("  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f)\n", "last loss",
-              last.loss, last.l1, last.ssim, last.depth);
+  std::printf("  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f, normal %.5f)\n",
+              "last loss", last.loss, last.l1, last.ssim, last.depth,
+              last.normal);
   std::printf("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
               train_psnr, frames.train.size());
   if (evaluation) {
@@ -583,6 +584,10 @@ void AddFitCommand(CLI::App& app, Action* action) {
       ->capture_default_str();
   sub->add_option("--depth-weight", o->trainer.depth_weight,
                   "Weight of the depth loss")
+      ->capture_default_str();
+  sub->add_option("--normal-weight", o->trainer.normal_weight,
+                  "Weight of the depth-normal flatness term: Gaussians on a "
+                  "surface the depth maps show become discs in it (0: off)")
       ->capture_default_str();
   sub->add_option("--smoothness-weight", o->trainer.smoothness_weight,
                   "Weight of the motion bases' acceleration penalty")

@@ -12,6 +12,7 @@
 #include "src/core/log.h"
 #include "src/core/npy.h"
 #include "src/gs/loss.h"
+#include "src/gs/surface_loss.h"
 
 namespace pano4d {
 namespace {
@@ -118,6 +119,8 @@ void TrainerOptions::Check() const {
   non_negative(depth_weight, "depth_weight");
   non_negative(smoothness_weight, "smoothness_weight");
   non_negative(anisotropy_weight, "anisotropy_weight");
+  non_negative(normal_weight, "normal_weight");
+  positive(normal_tolerance, "normal_tolerance");
   if (!(max_anisotropy >= 1)) {
     throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
                 "must be at least 1");
@@ -148,6 +151,8 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"smoothness_weight", smoothness_weight},
           {"anisotropy_weight", anisotropy_weight},
           {"max_anisotropy", max_anisotropy},
+          {"normal_weight", normal_weight},
+          {"normal_tolerance", normal_tolerance},
           {"lr_mean", lr_mean},
           {"lr_log_scale", lr_log_scale},
           {"lr_quat", lr_quat},
@@ -288,11 +293,20 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
 
 void Trainer::Backprop(const RasterCamera& camera, int time,
                        const RenderOutput& out, const std::vector<float>& d_rgb,
-                       const std::vector<float>& d_depth) {
+                       const std::vector<float>& d_depth,
+                       const std::vector<float>* d_log_scales,
+                       const std::vector<float>* d_quats) {
   const RasterSettings settings = Settings();
   rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
                             &grads2d_);
   rasterizer_.ProjectBackward(composed_, camera, grads2d_, &grads_);
+  const auto add_to = [](const std::vector<float>* src,
+                         std::vector<float>* dst) {
+    if (src == nullptr) return;
+    for (std::size_t i = 0; i < dst->size(); ++i) (*dst)[i] += (*src)[i];
+  };
+  add_to(d_log_scales, &grads_.log_scales);
+  add_to(d_quats, &grads_.quats);
   if (gradient_hook) gradient_hook(&grads_);
 
   // A Gaussian with any non-finite gradient is left out of this step (its
@@ -401,8 +415,19 @@ StepReport Trainer::Step() {
     }
     report.depth = options_.depth_weight * sum * scale;
   }
+  d_shape_log_scales_.clear();
+  d_shape_quats_.clear();
+  if (options_.normal_weight > 0 && !view.depth.empty()) {
+    d_shape_log_scales_.assign(composed_.log_scales.size(), 0.0f);
+    d_shape_quats_.assign(composed_.quats.size(), 0.0f);
+    report.normal =
+        NormalFlatnessLoss(composed_, view.camera, view.depth,
+                           options_.normal_weight, options_.normal_tolerance,
+                           &d_shape_log_scales_, &d_shape_quats_)
+            .loss;
+  }
   times_.loss += Since(start);
-  report.loss = photo.total + report.depth;
+  report.loss = photo.total + report.depth + report.normal;
   if (!std::isfinite(report.loss)) {
     ++skipped_steps_total_;
     ++iteration_;
@@ -423,7 +448,9 @@ StepReport Trainer::Step() {
   basis_grads_.rotations.assign(scene_.bases.rotations.size(), 0.0f);
   basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
   const double motion_before = times_.motion;
-  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_);
+  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_,
+           d_shape_log_scales_.empty() ? nullptr : &d_shape_log_scales_,
+           d_shape_quats_.empty() ? nullptr : &d_shape_quats_);
 
   // Densification statistics: the screen-space gradient of each mean in
   // NDC units (pixels x size / 2), as 3DGS's threshold assumes.

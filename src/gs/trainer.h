@@ -44,9 +44,16 @@ struct TrainerOptions {
   // Shape regulariser (PhysGaussian's): anisotropy_weight times the mean
   // over Gaussians of max(0, largest / smallest scale - max_anisotropy).
   // Needle-like Gaussians fit the training rays and streak across every
-  // other view.
+  // other view. 10 rather than 4 since the normal term flattens Gaussians
+  // into discs (validation mPSNR +0.3 dB, docs/ARCHITECTURE.md).
   double anisotropy_weight = 0.1;
-  double max_anisotropy = 4.0;
+  double max_anisotropy = 10.0;
+  // Depth-normal flatness (surface_loss.h): normal_weight times the mean
+  // over the Gaussians on the surface a view's depth map shows (centre
+  // within normal_tolerance, relative, of the depth) of the share of their
+  // variance along the depth map's normal.
+  double normal_weight = 0.1;
+  double normal_tolerance = 0.03;
   // Learning rates (3DGS's; positions, basis translations times the scene
   // extent, decayed log-linearly to 1/100 over the run).
   double lr_mean = 1.6e-4;
@@ -95,7 +102,7 @@ struct StepReport {
   std::int64_t iteration = 0;  // after the step
   double loss = 0.0;           // total
   double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0,
-         anisotropy = 0.0;
+         anisotropy = 0.0, normal = 0.0;
   double psnr = 0.0;              // of this step's training view
   std::int64_t skipped_rows = 0;  // Gaussians with non-finite gradients
   bool skipped_step = false;      // the loss itself was not finite
@@ -170,9 +177,14 @@ class Trainer {
   void Densify(bool prune_large);
   void ResetOpacities();
   void UpdateLearningRates();
+  // Rasterizer backward from d_rgb and d_depth, plus (when given) shape
+  // gradients of the composed Gaussians' log-scales and quaternions, into
+  // the static, dynamic and basis gradients.
   void Backprop(const RasterCamera& camera, int time, const RenderOutput& out,
                 const std::vector<float>& d_rgb,
-                const std::vector<float>& d_depth);
+                const std::vector<float>& d_depth,
+                const std::vector<float>* d_log_scales = nullptr,
+                const std::vector<float>* d_quats = nullptr);
 
   TrainerOptions options_;
   GaussianScene scene_;
@@ -198,6 +210,7 @@ class Trainer {
   GaussianModel composed_;
   RenderOutput out_;
   GaussianGradients grads_;
+  std::vector<float> d_shape_log_scales_, d_shape_quats_;
   ProjectedGradients grads2d_;
   std::vector<float> d_rgb_, d_depth_, d_rgb_extra_;
   GaussianGradients static_grads_, dynamic_grads_;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "src/render/quaternion.h"
 #include "src/render/rasterizer.h"
 #include "src/render/sh.h"
 
@@ -46,16 +47,8 @@ void RasterizerT<T>::ProjectBackward(const GaussianModelT<T>& model,
     const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
                     model.means[3 * i + 2]);
     const Vec3 t = camera.rotation * mean + camera.translation;
-    Eigen::Matrix<T, 4, 1> q_raw(model.quats[4 * i], model.quats[4 * i + 1],
-                                 model.quats[4 * i + 2],
-                                 model.quats[4 * i + 3]);
-    const T q_norm = q_raw.norm();
-    const bool q_valid = q_norm > T(kMinQuaternionNorm);
-    const Eigen::Matrix<T, 4, 1> q =
-        q_valid ? Eigen::Matrix<T, 4, 1>(q_raw / q_norm)
-                : Eigen::Matrix<T, 4, 1>(1, 0, 0, 0);
-    const Mat3 rot =
-        Eigen::Quaternion<T>(q(0), q(1), q(2), q(3)).toRotationMatrix();
+    const UnitQuaternion<T> quat(&model.quats[4 * i]);
+    const Mat3 rot = quat.Rotation();
     const Vec3 scale(std::exp(model.log_scales[3 * i]),
                      std::exp(model.log_scales[3 * i + 1]),
                      std::exp(model.log_scales[3 * i + 2]));
@@ -146,20 +139,8 @@ void RasterizerT<T>::ProjectBackward(const GaussianModelT<T>& model,
     for (int k = 0; k < 3; ++k)
       grad->log_scales[3 * i + k] = scale(k) * rot.col(k).dot(d_m.col(k));
     const Mat3 d_r = d_m * scale.asDiagonal();
-    if (!q_valid) continue;  // the identity stands in: no gradient
-    const T w = q(0), x = q(1), y = q(2), z = q(3);
-    const auto& G = d_r;
-    const Eigen::Matrix<T, 4, 1> d_q(
-        T(2) * (-z * G(0, 1) + y * G(0, 2) + z * G(1, 0) - x * G(1, 2) -
-                y * G(2, 0) + x * G(2, 1)),
-        T(2) * (y * G(0, 1) + z * G(0, 2) + y * G(1, 0) - T(2) * x * G(1, 1) -
-                w * G(1, 2) + z * G(2, 0) + w * G(2, 1) - T(2) * x * G(2, 2)),
-        T(2) * (-T(2) * y * G(0, 0) + x * G(0, 1) + w * G(0, 2) + x * G(1, 0) +
-                z * G(1, 2) - w * G(2, 0) + z * G(2, 1) - T(2) * y * G(2, 2)),
-        T(2) * (-T(2) * z * G(0, 0) - w * G(0, 1) + x * G(0, 2) + w * G(1, 0) -
-                T(2) * z * G(1, 1) + y * G(1, 2) + x * G(2, 0) + y * G(2, 1)));
-    // Through the normalisation q / |q|.
-    const Eigen::Matrix<T, 4, 1> d_q_raw = (d_q - q * q.dot(d_q)) / q_norm;
+    // The identity stands in for a degenerate quaternion: no gradient.
+    const Eigen::Matrix<T, 4, 1> d_q_raw = quat.Backward(d_r);
     for (int k = 0; k < 4; ++k) grad->quats[4 * i + k] = d_q_raw(k);
   }
 }

@@ -8,6 +8,7 @@
 
 #include "src/core/error.h"
 #include "src/render/blend_kernel.h"
+#include "src/render/quaternion.h"
 #include "src/render/rasterizer.h"
 #include "src/render/sh.h"
 
@@ -46,13 +47,8 @@ void RasterizerT<T>::Project(const GaussianModelT<T>& model,
     if (!(t.z() > T(kNearPlane)) || !t.allFinite()) continue;
 
     // 3D covariance R S S^T R^T from the normalised quaternion and scales.
-    Eigen::Matrix<T, 4, 1> q(model.quats[4 * i], model.quats[4 * i + 1],
-                             model.quats[4 * i + 2], model.quats[4 * i + 3]);
-    const T q_norm = q.norm();
-    q = q_norm > T(kMinQuaternionNorm) ? Eigen::Matrix<T, 4, 1>(q / q_norm)
-                                       : Eigen::Matrix<T, 4, 1>(1, 0, 0, 0);
     const Eigen::Matrix<T, 3, 3> rot =
-        Eigen::Quaternion<T>(q(0), q(1), q(2), q(3)).toRotationMatrix();
+        UnitQuaternion<T>(&model.quats[4 * i]).Rotation();
     const Eigen::Matrix<T, 3, 1> scale(std::exp(model.log_scales[3 * i]),
                                        std::exp(model.log_scales[3 * i + 1]),
                                        std::exp(model.log_scales[3 * i + 2]));

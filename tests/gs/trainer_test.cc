@@ -9,6 +9,7 @@
 
 #include "src/core/error.h"
 #include "src/core/file.h"
+#include "src/gs/surface_loss.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 #include "tests/support/test_files.h"
@@ -268,8 +269,39 @@ TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {
   trainer.extra_view = [&](std::int64_t) { return &extra; };
   const StepReport r = trainer.Step();
   EXPECT_GT(r.extra, 0.0);
-  EXPECT_NEAR(r.loss, r.l1 * 0.8 + (1 - r.ssim) * 0.2 + r.depth + r.extra,
+  EXPECT_NEAR(r.loss,
+              r.l1 * 0.8 + (1 - r.ssim) * 0.2 + r.depth + r.normal + r.extra,
               1e-6);
+}
+
+TEST(TrainerTest, NormalFlatnessTermFlattensGaussiansAlongTheDepthNormals) {
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {-0.1f, 0.0f, 0.1f}, {0, 0, 0});
+  // The share of variance along the depth normals in the middle view.
+  const auto across = [&](const Trainer& t) {
+    std::vector<float> d_ls(t.scene().statics.size() * 3, 0.0f),
+        d_q(t.scene().statics.size() * 4, 0.0f);
+    return NormalFlatnessLoss(t.scene().statics, views[1].camera,
+                              views[1].depth, 1.0, 0.03, &d_ls, &d_q);
+  };
+  TrainerOptions off = FastOptions(150), on = FastOptions(150);
+  off.normal_weight = 0;
+  on.normal_weight = 1.0;
+  Trainer without(Perturbed(teacher, 3), views, off);
+  Trainer with(Perturbed(teacher, 3), views, on);
+  const double start = across(with).loss;
+  StepReport last_off, last_on;
+  while (!with.Done()) {
+    last_off = without.Step();
+    last_on = with.Step();
+  }
+  EXPECT_EQ(last_off.normal, 0.0);
+  EXPECT_GT(last_on.normal, 0.0);
+  const NormalFlatness a = across(without), b = across(with);
+  ASSERT_GT(b.gaussians, 30);
+  EXPECT_LT(b.loss, 0.5 * a.loss)
+      << "start " << start << " without " << a.loss << " with " << b.loss;
+  EXPECT_LT(b.loss, 0.5 * start);
 }
 
 }  // namespace

@@ -1,0 +1,153 @@
+#include "src/gs/surface_loss.h"
+
+#include <cmath>
+#include <string>
+
+#include "src/core/error.h"
+#include "src/render/quaternion.h"
+#include "src/render/rasterizer.h"
+
+namespace pano4d {
+
+template <typename T>
+bool DepthNormalAt(const std::vector<float>& depth,
+                   const RasterCameraT<T>& camera, int x, int y,
+                   Eigen::Matrix<T, 3, 1>* normal) {
+  using Vec3 = Eigen::Matrix<T, 3, 1>;
+  const int w = camera.width, h = camera.height;
+  if (x < 1 || y < 1 || x + 1 >= w || y + 1 >= h) return false;
+  const auto at = [&](int px, int py) {
+    return depth[static_cast<std::size_t>(py) * w + px];
+  };
+  const float z = at(x, y);
+  if (!(z > 0)) return false;
+  for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+    const float zn = at(x + dx, y + dy);
+    if (!(zn > 0) || std::abs(zn - z) > kNormalEdgeJump * z) return false;
+  }
+  const auto point = [&](int px, int py) {
+    const T d = at(px, py);
+    return Vec3((px + T(0.5) - camera.cx) / camera.fx * d,
+                (py + T(0.5) - camera.cy) / camera.fy * d, d);
+  };
+  const Vec3 n = (point(x + 1, y) - point(x - 1, y))
+                     .cross(point(x, y + 1) - point(x, y - 1));
+  const T length = n.norm();
+  if (!(length > T(0))) return false;
+  *normal = n / length;
+  return true;
+}
+
+template <typename T>
+NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
+                                  const RasterCameraT<T>& camera,
+                                  const std::vector<float>& depth,
+                                  double weight, double tolerance,
+                                  std::vector<T>* d_log_scales,
+                                  std::vector<T>* d_quats) {
+  using Vec3 = Eigen::Matrix<T, 3, 1>;
+  using Mat3 = Eigen::Matrix<T, 3, 3>;
+  const int w = camera.width, h = camera.height;
+  const std::size_t n = model.size();
+  if (depth.size() != static_cast<std::size_t>(w) * h) {
+    throw Error("normal flatness", "depth", std::to_string(depth.size()),
+                "expected " + std::to_string(w) + " x " + std::to_string(h) +
+                    " values (the camera's size)");
+  }
+  if (d_log_scales->size() != n * 3 || d_quats->size() != n * 4) {
+    throw Error("normal flatness", "gradients",
+                std::to_string(d_log_scales->size()),
+                "expected arrays sized like the model's " + std::to_string(n) +
+                    " Gaussians");
+  }
+  NormalFlatness result;
+  if (weight == 0 || n == 0) return result;
+
+  // Per Gaussian: f_i (or -1 when left out), then the mean's scale.
+  std::vector<T> f(n, T(-1));
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
+    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
+                    model.means[3 * i + 2]);
+    const Vec3 t = camera.rotation * mean + camera.translation;
+    if (!(t.z() > T(kNearPlane))) continue;
+    const T u = camera.fx * t.x() / t.z() + camera.cx;
+    const T v = camera.fy * t.y() / t.z() + camera.cy;
+    if (!(u >= 0 && v >= 0 && u < w && v < h)) continue;
+    const int px = static_cast<int>(u), py = static_cast<int>(v);
+    const float d = depth[static_cast<std::size_t>(py) * w + px];
+    if (!(d > 0) || std::abs(t.z() - T(d)) > T(tolerance) * T(d)) continue;
+    Vec3 normal_camera;
+    if (!DepthNormalAt(depth, camera, px, py, &normal_camera)) continue;
+    const Vec3 normal = camera.rotation.transpose() * normal_camera;
+    const UnitQuaternion<T> quat(&model.quats[4 * i]);
+    const Mat3 rot = quat.Rotation();
+    const Vec3 local = rot.transpose() * normal;  // m_k = r_k . n
+    Vec3 var;
+    for (int k = 0; k < 3; ++k)
+      var(k) = std::exp(T(2) * model.log_scales[3 * i + k]);
+    const T trace = var.sum();
+    f[i] = var.dot(local.cwiseProduct(local)) / trace;
+  }
+  std::int64_t used = 0;
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (f[i] < 0) continue;
+    ++used;
+    sum += f[i];
+  }
+  if (used == 0) return result;
+  result.gaussians = used;
+  result.loss = weight * sum / static_cast<double>(used);
+  const T scale = static_cast<T>(weight / static_cast<double>(used));
+
+  // Gradients: f = sum_k s_k^2 m_k^2 / S with S = sum_k s_k^2, m = R^T n:
+  //   df/dlog s_k = 2 s_k^2 (m_k^2 - f) / S,  df/dR(:, k) = 2 s_k^2 m_k n / S.
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
+    if (f[i] < 0) continue;
+    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
+                    model.means[3 * i + 2]);
+    const Vec3 t = camera.rotation * mean + camera.translation;
+    const int px = static_cast<int>(camera.fx * t.x() / t.z() + camera.cx);
+    const int py = static_cast<int>(camera.fy * t.y() / t.z() + camera.cy);
+    Vec3 normal_camera;
+    DepthNormalAt(depth, camera, px, py, &normal_camera);
+    const Vec3 normal = camera.rotation.transpose() * normal_camera;
+    const UnitQuaternion<T> quat(&model.quats[4 * i]);
+    const Mat3 rot = quat.Rotation();
+    const Vec3 local = rot.transpose() * normal;
+    Vec3 var;
+    for (int k = 0; k < 3; ++k)
+      var(k) = std::exp(T(2) * model.log_scales[3 * i + k]);
+    const T trace = var.sum();
+    Mat3 d_rot;
+    for (int k = 0; k < 3; ++k) {
+      (*d_log_scales)[3 * i + k] +=
+          scale * T(2) * var(k) * (local(k) * local(k) - f[i]) / trace;
+      d_rot.col(k) = T(2) * var(k) * local(k) * normal / trace;
+    }
+    const Eigen::Matrix<T, 4, 1> d_q = quat.Backward(d_rot) * scale;
+    for (int k = 0; k < 4; ++k) (*d_quats)[4 * i + k] += d_q(k);
+  }
+  return result;
+}
+
+template bool DepthNormalAt(const std::vector<float>&,
+                            const RasterCameraT<float>&, int, int,
+                            Eigen::Matrix<float, 3, 1>*);
+template bool DepthNormalAt(const std::vector<float>&,
+                            const RasterCameraT<double>&, int, int,
+                            Eigen::Matrix<double, 3, 1>*);
+template NormalFlatness NormalFlatnessLoss(const GaussianModelT<float>&,
+                                           const RasterCameraT<float>&,
+                                           const std::vector<float>&, double,
+                                           double, std::vector<float>*,
+                                           std::vector<float>*);
+template NormalFlatness NormalFlatnessLoss(const GaussianModelT<double>&,
+                                           const RasterCameraT<double>&,
+                                           const std::vector<float>&, double,
+                                           double, std::vector<double>*,
+                                           std::vector<double>*);
+
+}  // namespace pano4d
