@@ -1,5 +1,6 @@
 #include "src/gs/surface_loss.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -8,6 +9,21 @@
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
+
+namespace {
+
+// The variances along the local axes divided by the largest: f and its
+// gradients depend on their ratios only, and exp(2 log s) alone overflows
+// for log-scales above about 44 (float) and underflows below -44.
+template <typename T>
+Eigen::Matrix<T, 3, 1> RelativeVariances(const T* log_scales) {
+  const T top = std::max({log_scales[0], log_scales[1], log_scales[2]});
+  return Eigen::Matrix<T, 3, 1>(std::exp(T(2) * (log_scales[0] - top)),
+                                std::exp(T(2) * (log_scales[1] - top)),
+                                std::exp(T(2) * (log_scales[2] - top)));
+}
+
+}  // namespace
 
 template <typename T>
 bool DepthNormalAt(const std::vector<float>& depth,
@@ -83,9 +99,7 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
     const UnitQuaternion<T> quat(&model.quats[4 * i]);
     const Mat3 rot = quat.Rotation();
     const Vec3 local = rot.transpose() * normal;  // m_k = r_k . n
-    Vec3 var;
-    for (int k = 0; k < 3; ++k)
-      var(k) = std::exp(T(2) * model.log_scales[3 * i + k]);
+    const Vec3 var = RelativeVariances(&model.log_scales[3 * i]);
     const T trace = var.sum();
     f[i] = var.dot(local.cwiseProduct(local)) / trace;
   }
@@ -117,9 +131,7 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
     const UnitQuaternion<T> quat(&model.quats[4 * i]);
     const Mat3 rot = quat.Rotation();
     const Vec3 local = rot.transpose() * normal;
-    Vec3 var;
-    for (int k = 0; k < 3; ++k)
-      var(k) = std::exp(T(2) * model.log_scales[3 * i + k]);
+    const Vec3 var = RelativeVariances(&model.log_scales[3 * i]);
     const T trace = var.sum();
     Mat3 d_rot;
     for (int k = 0; k < 3; ++k) {

@@ -108,6 +108,23 @@ TEST(NormalFlatnessTest, DiscInTheSurfaceScoresZeroFinAndNeedleDoNot) {
   EXPECT_NEAR(Evaluate(needle, 0.1).loss, 0.1, 1e-4) << "scaled by the weight";
 }
 
+TEST(NormalFlatnessTest, ExtremeScalesStayFinite) {
+  // exp(2 x 400) overflows a double, exp(-2 x 400) underflows to 0.
+  const Eigen::Vector3d at = PlanePoint(Camera(), 20, 15);
+  const Eigen::Matrix3d in_plane = FrameWithThirdAxis(kPlaneNormal);
+  GaussianModelT<double> m;
+  Add(&m, at, in_plane, {1, 1, 1});
+  m.log_scales = {400, 400, -400};
+  std::vector<double> d_ls(3, 0.0), d_q(4, 0.0);
+  const NormalFlatness f = Evaluate(m, 1.0, &d_ls, &d_q);
+  EXPECT_EQ(f.gaussians, 1);
+  EXPECT_NEAR(f.loss, 0.0, 1e-9) << "a disc in the surface";
+  m.log_scales = {-400, -400, 400};  // a needle along the normal
+  EXPECT_NEAR(Evaluate(m).loss, 1.0, 1e-9);
+  for (double g : d_ls) EXPECT_TRUE(std::isfinite(g));
+  for (double g : d_q) EXPECT_TRUE(std::isfinite(g));
+}
+
 TEST(NormalFlatnessTest, GaussiansOffTheSurfaceOrOutsideAreLeftOut) {
   const Eigen::Matrix3d fin =
       FrameWithThirdAxis(FrameWithThirdAxis(kPlaneNormal).col(0));
