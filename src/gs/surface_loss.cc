@@ -79,8 +79,10 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
   NormalFlatness result;
   if (weight == 0 || n == 0) return result;
 
-  // Per Gaussian: f_i (or -1 when left out), then the mean's scale.
+  // Per Gaussian: f_i (or -1 when left out) and the world normal it was
+  // taken against; then the mean's scale.
   std::vector<T> f(n, T(-1));
+  std::vector<Vec3> normals(n);
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
     const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
@@ -96,6 +98,7 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
     Vec3 normal_camera;
     if (!DepthNormalAt(depth, camera, px, py, &normal_camera)) continue;
     const Vec3 normal = camera.rotation.transpose() * normal_camera;
+    normals[i] = normal;
     const UnitQuaternion<T> quat(&model.quats[4 * i]);
     const Mat3 rot = quat.Rotation();
     const Vec3 local = rot.transpose() * normal;  // m_k = r_k . n
@@ -120,14 +123,7 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
     if (f[i] < 0) continue;
-    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
-                    model.means[3 * i + 2]);
-    const Vec3 t = camera.rotation * mean + camera.translation;
-    const int px = static_cast<int>(camera.fx * t.x() / t.z() + camera.cx);
-    const int py = static_cast<int>(camera.fy * t.y() / t.z() + camera.cy);
-    Vec3 normal_camera;
-    DepthNormalAt(depth, camera, px, py, &normal_camera);
-    const Vec3 normal = camera.rotation.transpose() * normal_camera;
+    const Vec3& normal = normals[i];
     const UnitQuaternion<T> quat(&model.quats[4 * i]);
     const Mat3 rot = quat.Rotation();
     const Vec3 local = rot.transpose() * normal;

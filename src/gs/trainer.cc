@@ -300,13 +300,13 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
   rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
                             &grads2d_);
   rasterizer_.ProjectBackward(composed_, camera, grads2d_, &grads_);
-  const auto add_to = [](const std::vector<float>* src,
-                         std::vector<float>* dst) {
-    if (src == nullptr) return;
-    for (std::size_t i = 0; i < dst->size(); ++i) (*dst)[i] += (*src)[i];
+  const auto add = [](const std::vector<float>& src, std::size_t begin,
+                      std::size_t count, std::vector<float>* dst) {
+    for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
   };
-  add_to(d_log_scales, &grads_.log_scales);
-  add_to(d_quats, &grads_.quats);
+  if (d_log_scales != nullptr)
+    add(*d_log_scales, 0, grads_.log_scales.size(), &grads_.log_scales);
+  if (d_quats != nullptr) add(*d_quats, 0, grads_.quats.size(), &grads_.quats);
   if (gradient_hook) gradient_hook(&grads_);
 
   // A Gaussian with any non-finite gradient is left out of this step (its
@@ -343,10 +343,6 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
   }
 
   const std::size_t ns = scene_.statics.size();
-  const auto add = [](const std::vector<float>& src, std::size_t begin,
-                      std::size_t count, std::vector<float>* dst) {
-    for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
-  };
   add(grads_.means, 0, ns * 3, &static_grads_.means);
   add(grads_.log_scales, 0, ns * 3, &static_grads_.log_scales);
   add(grads_.quats, 0, ns * 4, &static_grads_.quats);
