@@ -509,9 +509,11 @@ int RunFitCommand(FitCommandOptions o) {
     std::printf("  %-22s none (%s)\n", "expansion",
                 o.no_expansion ? "--no-expansion" : "run too short");
   }
-  std::printf("  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f, normal %.5f)\n",
-              "last loss", last.loss, last.l1, last.ssim, last.depth,
-              last.normal);
+  std::printf(
+      "  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f, normal %.5f, "
+      "hidden %.5f)\n",
+      "last loss", last.loss, last.l1, last.ssim, last.depth, last.normal,
+      last.hidden);
   std::printf("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
               train_psnr, frames.train.size());
   if (evaluation) {
@@ -588,6 +590,15 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--normal-weight", o->trainer.normal_weight,
                   "Weight of the depth-normal flatness term: Gaussians on a "
                   "surface the depth maps show become discs in it (0: off)")
+      ->capture_default_str();
+  sub->add_option("--hidden-weight", o->trainer.hidden_weight,
+                  "Weight of the hidden-depth term: a moving object's "
+                  "Gaussians may not hide deeper behind its visible surface "
+                  "than --hidden-thickness (0: off)")
+      ->capture_default_str();
+  sub->add_option("--hidden-thickness", o->trainer.hidden_thickness,
+                  "Thickness of moving objects, relative to their depth, "
+                  "for the hidden-depth term")
       ->capture_default_str();
   sub->add_option("--smoothness-weight", o->trainer.smoothness_weight,
                   "Weight of the motion bases' acceleration penalty")

@@ -141,6 +141,73 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
   return result;
 }
 
+template <typename T>
+HiddenDepth HiddenDepthLoss(const GaussianModelT<T>& model, std::size_t first,
+                            const RasterCameraT<T>& camera,
+                            const std::vector<float>& depth,
+                            const std::vector<std::uint8_t>& mask,
+                            double weight, double thickness,
+                            std::vector<T>* d_means) {
+  using Vec3 = Eigen::Matrix<T, 3, 1>;
+  const int w = camera.width, h = camera.height;
+  const std::size_t n = model.size();
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  if (depth.size() != pixels || mask.size() != pixels) {
+    throw Error(
+        "hidden depth", "depth and mask",
+        std::to_string(depth.size()) + ", " + std::to_string(mask.size()),
+        "expected " + std::to_string(w) + " x " + std::to_string(h) +
+            " values each (the camera's size)");
+  }
+  if (d_means->size() != n * 3) {
+    throw Error("hidden depth", "gradients", std::to_string(d_means->size()),
+                "expected an array sized like the model's " +
+                    std::to_string(n) + " Gaussians");
+  }
+  HiddenDepth result;
+  if (weight == 0 || first >= n) return result;
+
+  // Per row: the hinge (0 when within the thickness, -1 when not a
+  // candidate) and the depth it was measured against.
+  std::vector<T> hinge(n, T(-1));
+  std::vector<T> given(n, T(0));
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = static_cast<std::ptrdiff_t>(first);
+       i < static_cast<std::ptrdiff_t>(n); ++i) {
+    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
+                    model.means[3 * i + 2]);
+    const Vec3 t = camera.rotation * mean + camera.translation;
+    if (!(t.z() > T(kNearPlane))) continue;
+    const T u = camera.fx * t.x() / t.z() + camera.cx;
+    const T v = camera.fy * t.y() / t.z() + camera.cy;
+    if (!(u >= 0 && v >= 0 && u < w && v < h)) continue;
+    const std::size_t pixel =
+        static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u);
+    const float d = depth[pixel];
+    if (!mask[pixel] || !(d > 0)) continue;
+    given[i] = T(d);
+    hinge[i] = std::max(T(0), t.z() / T(d) - T(1) - T(thickness));
+  }
+  double sum = 0;
+  for (std::size_t i = first; i < n; ++i) {
+    if (hinge[i] < 0) continue;
+    ++result.gaussians;
+    result.hidden += hinge[i] > 0;
+    sum += hinge[i];
+  }
+  if (result.gaussians == 0) return result;
+  const double scale = weight / static_cast<double>(result.gaussians);
+  result.loss = scale * sum;
+  // dz/dmean is the camera's z axis in world coordinates.
+  const Vec3 axis = camera.rotation.row(2).transpose();
+  for (std::size_t i = first; i < n; ++i) {
+    if (!(hinge[i] > 0)) continue;
+    const T g = static_cast<T>(scale) / given[i];
+    for (int k = 0; k < 3; ++k) (*d_means)[3 * i + k] += g * axis(k);
+  }
+  return result;
+}
+
 template bool DepthNormalAt(const std::vector<float>&,
                             const RasterCameraT<float>&, int, int,
                             Eigen::Matrix<float, 3, 1>*);
@@ -157,5 +224,15 @@ template NormalFlatness NormalFlatnessLoss(const GaussianModelT<double>&,
                                            const std::vector<float>&, double,
                                            double, std::vector<double>*,
                                            std::vector<double>*);
+template HiddenDepth HiddenDepthLoss(const GaussianModelT<float>&, std::size_t,
+                                     const RasterCameraT<float>&,
+                                     const std::vector<float>&,
+                                     const std::vector<std::uint8_t>&, double,
+                                     double, std::vector<float>*);
+template HiddenDepth HiddenDepthLoss(const GaussianModelT<double>&, std::size_t,
+                                     const RasterCameraT<double>&,
+                                     const std::vector<float>&,
+                                     const std::vector<std::uint8_t>&, double,
+                                     double, std::vector<double>*);
 
 }  // namespace pano4d

@@ -120,6 +120,8 @@ void TrainerOptions::Check() const {
   non_negative(smoothness_weight, "smoothness_weight");
   non_negative(anisotropy_weight, "anisotropy_weight");
   non_negative(normal_weight, "normal_weight");
+  non_negative(hidden_weight, "hidden_weight");
+  non_negative(hidden_thickness, "hidden_thickness");
   positive(normal_tolerance, "normal_tolerance");
   if (!(max_anisotropy >= 1)) {
     throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
@@ -153,6 +155,8 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"max_anisotropy", max_anisotropy},
           {"normal_weight", normal_weight},
           {"normal_tolerance", normal_tolerance},
+          {"hidden_weight", hidden_weight},
+          {"hidden_thickness", hidden_thickness},
           {"lr_mean", lr_mean},
           {"lr_log_scale", lr_log_scale},
           {"lr_quat", lr_quat},
@@ -294,8 +298,7 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
 void Trainer::Backprop(const RasterCamera& camera, int time,
                        const RenderOutput& out, const std::vector<float>& d_rgb,
                        const std::vector<float>& d_depth,
-                       const std::vector<float>* d_log_scales,
-                       const std::vector<float>* d_quats) {
+                       const GaussianGradients* direct) {
   const RasterSettings settings = Settings();
   rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
                             &grads2d_);
@@ -304,9 +307,13 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
                       std::size_t count, std::vector<float>* dst) {
     for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
   };
-  if (d_log_scales != nullptr)
-    add(*d_log_scales, 0, grads_.log_scales.size(), &grads_.log_scales);
-  if (d_quats != nullptr) add(*d_quats, 0, grads_.quats.size(), &grads_.quats);
+  if (direct != nullptr) {
+    for (auto [from, to] : {std::pair{&direct->means, &grads_.means},
+                            {&direct->log_scales, &grads_.log_scales},
+                            {&direct->quats, &grads_.quats}}) {
+      if (!from->empty()) add(*from, 0, to->size(), to);
+    }
+  }
   if (gradient_hook) gradient_hook(&grads_);
 
   // A Gaussian with any non-finite gradient is left out of this step (its
@@ -411,19 +418,29 @@ StepReport Trainer::Step() {
     }
     report.depth = options_.depth_weight * sum * scale;
   }
-  d_shape_log_scales_.clear();
-  d_shape_quats_.clear();
+  direct_grads_.means.clear();
+  direct_grads_.log_scales.clear();
+  direct_grads_.quats.clear();
   if (options_.normal_weight > 0 && !view.depth.empty()) {
-    d_shape_log_scales_.assign(composed_.log_scales.size(), 0.0f);
-    d_shape_quats_.assign(composed_.quats.size(), 0.0f);
+    direct_grads_.log_scales.assign(composed_.log_scales.size(), 0.0f);
+    direct_grads_.quats.assign(composed_.quats.size(), 0.0f);
     report.normal =
         NormalFlatnessLoss(composed_, view.camera, view.depth,
                            options_.normal_weight, options_.normal_tolerance,
-                           &d_shape_log_scales_, &d_shape_quats_)
+                           &direct_grads_.log_scales, &direct_grads_.quats)
+            .loss;
+  }
+  if (options_.hidden_weight > 0 && !view.depth.empty() &&
+      !view.dynamic.empty() && scene_.dynamics.size() > 0) {
+    direct_grads_.means.assign(composed_.means.size(), 0.0f);
+    report.hidden =
+        HiddenDepthLoss(composed_, scene_.statics.size(), view.camera,
+                        view.depth, view.dynamic, options_.hidden_weight,
+                        options_.hidden_thickness, &direct_grads_.means)
             .loss;
   }
   times_.loss += Since(start);
-  report.loss = photo.total + report.depth + report.normal;
+  report.loss = photo.total + report.depth + report.normal + report.hidden;
   if (!std::isfinite(report.loss)) {
     ++skipped_steps_total_;
     ++iteration_;
@@ -444,9 +461,7 @@ StepReport Trainer::Step() {
   basis_grads_.rotations.assign(scene_.bases.rotations.size(), 0.0f);
   basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
   const double motion_before = times_.motion;
-  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_,
-           d_shape_log_scales_.empty() ? nullptr : &d_shape_log_scales_,
-           d_shape_quats_.empty() ? nullptr : &d_shape_quats_);
+  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_, &direct_grads_);
 
   // Densification statistics: the screen-space gradient of each mean in
   // NDC units (pixels x size / 2), as 3DGS's threshold assumes.

@@ -213,5 +213,124 @@ TEST(NormalFlatnessTest, MismatchedSizesAreRefused) {
                Error);
 }
 
+// Hidden depth: the plane is the moving object's visible surface; the mask
+// covers the image's left half (x < 20).
+std::vector<std::uint8_t> LeftHalfMask() {
+  std::vector<std::uint8_t> mask(kWidth * kHeight, 0);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth / 2; ++x) mask[y * kWidth + x] = 1;
+  return mask;
+}
+
+// A Gaussian on the ray through pixel (x, y)'s centre at `factor` times the
+// plane's depth there.
+Eigen::Vector3d OnRay(double x, double y, double factor) {
+  return PlanePoint(Camera(), x, y) * factor;
+}
+
+constexpr double kThickness = 0.05;
+
+HiddenDepth EvaluateHidden(const GaussianModelT<double>& m, std::size_t first,
+                           std::vector<double>* d_means) {
+  return HiddenDepthLoss(m, first, Camera(), PlaneDepth(Camera()),
+                         LeftHalfMask(), 1.0, kThickness, d_means);
+}
+
+TEST(HiddenDepthTest, OnlyMovingGaussiansHiddenTooDeepInTheMaskCount) {
+  GaussianModelT<double> m;
+  const Eigen::Matrix3d id = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d s(0.02, 0.02, 0.02);
+  Add(&m, OnRay(8.5, 10.5, 1.3), id, s);      // 0: static row, left out
+  Add(&m, OnRay(8.5, 10.5, 1.3), id, s);      // 1: 30% behind: hinge 0.25
+  Add(&m, OnRay(10.5, 12.5, 1.03), id, s);    // 2: within the thickness: 0
+  Add(&m, OnRay(12.5, 5.5, 0.8), id, s);      // 3: in front: 0
+  Add(&m, OnRay(30.5, 10.5, 1.5), id, s);     // 4: outside the mask, left out
+  Add(&m, Eigen::Vector3d(0, 0, -1), id, s);  // 5: behind the camera
+  std::vector<double> d_means(m.size() * 3, 0.0);
+  const HiddenDepth r = EvaluateHidden(m, 1, &d_means);
+  EXPECT_EQ(r.gaussians, 3);
+  EXPECT_EQ(r.hidden, 1);
+  EXPECT_NEAR(r.loss, (0.3 - kThickness) / 3, 1e-5);
+  // Only the hidden one is pushed, along the camera's +z (towards the
+  // camera under descent).
+  for (int i : {0, 2, 3, 4, 5})
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(d_means[3 * i + k], 0.0) << i;
+  EXPECT_GT(d_means[3 * 1 + 2], 0.0);
+  EXPECT_NEAR(d_means[3 * 1], 0.0, 1e-12);
+  EXPECT_NEAR(d_means[3 * 1 + 1], 0.0, 1e-12);
+}
+
+TEST(HiddenDepthTest, GradientMatchesCentralDifferences) {
+  // A rotated camera, so that the depth axis is not a world axis; Gaussians
+  // hidden at several depths and one within the thickness.
+  RasterCameraT<double> camera = Camera();
+  camera.rotation =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, -2, 0.5).normalized())
+          .toRotationMatrix();
+  camera.translation = Eigen::Vector3d(0.1, -0.2, 0.3);
+  const std::vector<float> depth = PlaneDepth(Camera());
+  GaussianModelT<double> m;
+  const Eigen::Matrix3d id = Eigen::Matrix3d::Identity();
+  for (auto [x, y, f] : {std::tuple{5.5, 6.5, 1.2},
+                         {9.5, 20.5, 1.4},
+                         {14.5, 14.5, 1.01},
+                         {3.5, 25.5, 1.1}}) {
+    // In camera coordinates on the ray, then to the world.
+    const Eigen::Vector3d c = OnRay(x, y, f);
+    Add(&m, camera.rotation.transpose() * (c - camera.translation), id,
+        {0.02, 0.02, 0.02});
+  }
+  const auto loss = [&](const GaussianModelT<double>& model,
+                        std::vector<double>* g) {
+    std::vector<double> scratch(model.size() * 3, 0.0);
+    return HiddenDepthLoss(model, 0, camera, depth, LeftHalfMask(), 0.7,
+                           kThickness, g ? g : &scratch)
+        .loss;
+  };
+  std::vector<double> d_means(m.size() * 3, 0.0);
+  EXPECT_GT(loss(m, &d_means), 0.0);
+  constexpr double kStep = 1e-6;
+  for (std::size_t k = 0; k < m.means.size(); ++k) {
+    GaussianModelT<double> plus = m, minus = m;
+    plus.means[k] += kStep;
+    minus.means[k] -= kStep;
+    const double numeric =
+        (loss(plus, nullptr) - loss(minus, nullptr)) / (2 * kStep);
+    EXPECT_NEAR(d_means[k], numeric, 1e-6 + 1e-4 * std::abs(numeric)) << k;
+  }
+}
+
+TEST(HiddenDepthTest, DescentBringsAHiddenGaussianToTheSurface) {
+  GaussianModelT<double> m;
+  Add(&m, OnRay(8.5, 10.5, 1.4), Eigen::Matrix3d::Identity(),
+      {0.02, 0.02, 0.02});
+  for (int step = 0; step < 2000; ++step) {
+    std::vector<double> d_means(3, 0.0);
+    if (EvaluateHidden(m, 0, &d_means).hidden == 0) break;
+    for (int k = 0; k < 3; ++k) m.means[k] -= 0.5 * d_means[k];
+  }
+  std::vector<double> d_means(3, 0.0);
+  const HiddenDepth r = EvaluateHidden(m, 0, &d_means);
+  EXPECT_EQ(r.gaussians, 1);
+  EXPECT_EQ(r.hidden, 0);
+  const double surface = PlaneDepth(Camera())[10 * kWidth + 8];
+  EXPECT_LE(m.means[2], surface * (1 + kThickness) + 1e-9);
+  EXPECT_GT(m.means[2], surface);
+}
+
+TEST(HiddenDepthTest, MismatchedSizesAreRefused) {
+  GaussianModelT<double> m;
+  Add(&m, OnRay(8.5, 10.5, 1.3), Eigen::Matrix3d::Identity(),
+      {0.02, 0.02, 0.02});
+  std::vector<double> d_means(3, 0.0), short_means(2, 0.0);
+  EXPECT_THROW(
+      HiddenDepthLoss(m, 0, Camera(), PlaneDepth(Camera()),
+                      std::vector<std::uint8_t>(10, 1), 1.0, 0.05, &d_means),
+      Error);
+  EXPECT_THROW(HiddenDepthLoss(m, 0, Camera(), PlaneDepth(Camera()),
+                               LeftHalfMask(), 1.0, 0.05, &short_means),
+               Error);
+}
+
 }  // namespace
 }  // namespace pano4d

@@ -304,5 +304,82 @@ TEST(TrainerTest, NormalFlatnessTermFlattensGaussiansAlongTheDepthNormals) {
   EXPECT_LT(b.loss, 0.5 * start);
 }
 
+TEST(TrainerTest, HiddenDepthTermBringsHiddenMovingGaussiansToTheSurface) {
+  // An opaque moving plate in front of a static background, and 60 more
+  // moving Gaussians 30% behind the plate: no view sees them, so only the
+  // hidden-depth term moves them.
+  GaussianScene teacher = StaticTeacher();
+  teacher.num_times = 2;
+  // Moves a Gaussian along its ray (from the origin) to depth z, so that it
+  // keeps its footprint.
+  const auto to_depth = [](GaussianModel* m, std::size_t i, float z) {
+    const float k = z / m->means[i * 3 + 2];
+    for (int j = 0; j < 3; ++j) m->means[i * 3 + j] *= k;
+    for (int j = 0; j < 3; ++j) m->log_scales[i * 3 + j] += std::log(k);
+  };
+  GaussianModel plate = RandomViewFillingScene(800, CameraAt(0), 5.0f, 7);
+  for (std::size_t i = 0; i < plate.size(); ++i) {
+    to_depth(&plate, i, 1.5f);
+    plate.opacities[i] = 6.0f;
+  }
+  teacher.dynamics = plate;
+  teacher.bases.Reset(1, 2);
+  teacher.bases.translation(0, 1)[0] = 0.02f;
+  teacher.logits.assign(plate.size(), 0.0f);
+  auto views = RenderViews(teacher, {-0.05f, 0.05f}, {0, 1});
+  // The plate's silhouette is the dynamic mask.
+  GaussianScene plate_only = teacher;
+  plate_only.statics = GaussianModel();
+  plate_only.statics.sh_degree = teacher.statics.sh_degree;
+  const auto masks = RenderViews(plate_only, {-0.05f, 0.05f}, {0, 1});
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    views[v].dynamic.assign(views[v].depth.size(), 0);
+    for (std::size_t p = 0; p < views[v].depth.size(); ++p)
+      views[v].dynamic[p] = masks[v].depth[p] > 0;
+  }
+
+  GaussianScene student = teacher;
+  GaussianModel hidden = RandomViewFillingScene(60, CameraAt(0), 1.0f, 9);
+  std::vector<std::uint32_t> rows(hidden.size());
+  for (std::size_t i = 0; i < hidden.size(); ++i) {
+    rows[i] = static_cast<std::uint32_t>(i);
+    // Inside the plate's middle, where every view shows the plate.
+    to_depth(&hidden, i, 1.5f * 1.3f);
+    hidden.means[i * 3] *= 0.4f;
+    hidden.means[i * 3 + 1] *= 0.4f;
+  }
+  AppendGaussianRows(hidden, rows, &student.dynamics);
+  student.logits.assign(student.dynamics.size(), 0.0f);
+
+  const auto hidden_count = [&](const Trainer& t) {
+    GaussianModel composed;
+    t.scene().ComposeAt(0, &composed);
+    std::vector<float> d_means(composed.size() * 3, 0.0f);
+    return HiddenDepthLoss(composed, t.scene().statics.size(), views[0].camera,
+                           views[0].depth, views[0].dynamic, 1.0, 0.1,
+                           &d_means);
+  };
+  TrainerOptions off = FastOptions(200), on = FastOptions(200);
+  off.hidden_weight = 0;
+  on.hidden_weight = 1.0;
+  on.hidden_thickness = 0.1;
+  // Means move 30x faster than by default, so that 200 steps (the rate
+  // decaying 100x) can carry them the 0.3 they must go.
+  off.lr_mean = on.lr_mean = 5e-3;
+  Trainer without(student, views, off);
+  Trainer with(student, views, on);
+  const HiddenDepth start = hidden_count(with);
+  ASSERT_GE(start.hidden, 55);
+  StepReport last_off, last_on;
+  while (!with.Done()) {
+    last_off = without.Step();
+    last_on = with.Step();
+  }
+  EXPECT_EQ(last_off.hidden, 0.0);
+  const HiddenDepth a = hidden_count(without), b = hidden_count(with);
+  EXPECT_GE(a.hidden, 55) << "without the term nothing moves them";
+  EXPECT_LE(b.hidden, 5) << "start " << start.hidden << " with " << b.hidden;
+}
+
 }  // namespace
 }  // namespace pano4d
