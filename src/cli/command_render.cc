@@ -43,6 +43,9 @@ int RunRender(const RenderCommandOptions& o) {
   const FittedWorkspace fitted = LoadFittedWorkspace(o.workspace);
   const int num_times = fitted.scene.num_times;
   std::vector<TimedCamera> cameras;
+  // Each camera as cameras.json will hold it; the cameras render from
+  // these, so that the file renders the same frames again.
+  std::vector<nlohmann::json> cameras_json;
   std::string name = o.trajectory;
   if (o.trajectory == "orbit" || o.trajectory == "spiral" ||
       o.trajectory == "bullet") {
@@ -65,13 +68,17 @@ int RunRender(const RenderCommandOptions& o) {
     const WorkspaceFrame& reference = fitted.MiddleFrame();
     cameras = VideoCameras(v, RasterCamera::FromPosed(reference.camera),
                            fitted.Center());
+    for (TimedCamera& c : cameras) {
+      cameras_json.push_back(CameraToJson(c.camera));
+      c.camera = RasterCameraFromJson(cameras_json.back(), "render");
+    }
   } else {
     if (!fs::exists(o.trajectory)) {
       throw Error("--trajectory", "", o.trajectory,
                   "is neither orbit, spiral, bullet nor an existing camera "
                   "file ({\"views\": [{\"camera\": {...}, \"t\": T}]})");
     }
-    cameras = ReadCameraFile(o.trajectory);
+    cameras = ReadCameraFile(o.trajectory, &cameras_json);
     name = fs::path(o.trajectory).stem().string();
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       if (o.time >= 0) cameras[i].time = o.time;
@@ -93,8 +100,7 @@ int RunRender(const RenderCommandOptions& o) {
     frames.push_back(renderer.Render(cameras[i].camera, cameras[i].time));
     WriteImage(out / (Padded(static_cast<int>(i), 5) + ".png"),
                Image::FromOpenCV(frames.back(), name));
-    views.push_back(
-        {{"camera", CameraToJson(cameras[i].camera)}, {"t", cameras[i].time}});
+    views.push_back({{"camera", cameras_json[i]}, {"t", cameras[i].time}});
     bar.Add();
   }
   bar.Finish();

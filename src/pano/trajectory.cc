@@ -231,7 +231,8 @@ std::vector<TimedCamera> VideoCameras(const VideoPathOptions& o,
   return out;
 }
 
-std::vector<TimedCamera> ReadCameraFile(const std::string& path) {
+std::vector<TimedCamera> ReadCameraFile(
+    const std::string& path, std::vector<nlohmann::json>* cameras_json) {
   const nlohmann::json j = ReadJson(path);
   const nlohmann::json& views =
       j.is_object() && j.contains("views") ? j.at("views") : j;
@@ -248,6 +249,7 @@ std::vector<TimedCamera> ReadCameraFile(const std::string& path) {
     }
     out.push_back({RasterCameraFromJson(views[i].at("camera"), source),
                    GetJsonOr<int>(views[i], "t", 0, source)});
+    if (cameras_json != nullptr) cameras_json->push_back(views[i].at("camera"));
   }
   return out;
 }

@@ -104,6 +104,11 @@ std::vector<TimedCamera> VideoCameras(const VideoPathOptions& options,
                                       const Eigen::Vector3d& center);
 // A camera file: {"views": [{"camera": {...}, "t": T}, ...]} (the layout of
 // trajectories.json) or the list alone. Throws pano4d::Error naming the file.
-std::vector<TimedCamera> ReadCameraFile(const std::string& path);
+// `cameras_json`, when given, receives each view's "camera" object as read:
+// written back unchanged, it renders the same cameras bit for bit (a float
+// rotation does not survive CameraToJson's quaternion exactly).
+std::vector<TimedCamera> ReadCameraFile(
+    const std::string& path,
+    std::vector<nlohmann::json>* cameras_json = nullptr);
 
 }  // namespace pano4d

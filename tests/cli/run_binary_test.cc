@@ -252,6 +252,10 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   for (const char* f : {"00000.png", "00005.png"}) {
     EXPECT_EQ(Slurp(orbit / f), Slurp(dir_->path() / "again" / f)) << f;
   }
+  // And writes the cameras as it read them, so that every later
+  // generation renders the same frames too.
+  EXPECT_EQ(ReadJsonFile(dir_->path() / "again" / "cameras.json")["views"],
+            cameras["views"]);
   // Bullet time: every view at the time asked for.
   ASSERT_EQ(
       RunPano4d("render" + w + " --trajectory bullet --frames 6 --time 2", log),
