@@ -23,6 +23,25 @@ Eigen::Matrix<T, 3, 1> RelativeVariances(const T* log_scales) {
                                 std::exp(T(2) * (log_scales[2] - top)));
 }
 
+// Where row i's centre lands in `camera`: its camera-frame position and
+// pixel. False behind the near plane or outside the image.
+template <typename T>
+bool CentrePixel(const GaussianModelT<T>& model, std::size_t i,
+                 const RasterCameraT<T>& camera, Eigen::Matrix<T, 3, 1>* t,
+                 int* px, int* py) {
+  const Eigen::Matrix<T, 3, 1> mean(model.means[3 * i], model.means[3 * i + 1],
+                                    model.means[3 * i + 2]);
+  *t = camera.rotation * mean + camera.translation;
+  if (!(t->z() > T(kNearPlane))) return false;
+  const T u = camera.fx * t->x() / t->z() + camera.cx;
+  const T v = camera.fy * t->y() / t->z() + camera.cy;
+  if (!(u >= 0 && v >= 0 && u < camera.width && v < camera.height))
+    return false;
+  *px = static_cast<int>(u);
+  *py = static_cast<int>(v);
+  return true;
+}
+
 }  // namespace
 
 template <typename T>
@@ -85,14 +104,9 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
   std::vector<Vec3> normals(n);
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
-    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
-                    model.means[3 * i + 2]);
-    const Vec3 t = camera.rotation * mean + camera.translation;
-    if (!(t.z() > T(kNearPlane))) continue;
-    const T u = camera.fx * t.x() / t.z() + camera.cx;
-    const T v = camera.fy * t.y() / t.z() + camera.cy;
-    if (!(u >= 0 && v >= 0 && u < w && v < h)) continue;
-    const int px = static_cast<int>(u), py = static_cast<int>(v);
+    Vec3 t;
+    int px, py;
+    if (!CentrePixel(model, i, camera, &t, &px, &py)) continue;
     const float d = depth[static_cast<std::size_t>(py) * w + px];
     if (!(d > 0) || std::abs(t.z() - T(d)) > T(tolerance) * T(d)) continue;
     Vec3 normal_camera;
@@ -174,15 +188,10 @@ HiddenDepth HiddenDepthLoss(const GaussianModelT<T>& model, std::size_t first,
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = static_cast<std::ptrdiff_t>(first);
        i < static_cast<std::ptrdiff_t>(n); ++i) {
-    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
-                    model.means[3 * i + 2]);
-    const Vec3 t = camera.rotation * mean + camera.translation;
-    if (!(t.z() > T(kNearPlane))) continue;
-    const T u = camera.fx * t.x() / t.z() + camera.cx;
-    const T v = camera.fy * t.y() / t.z() + camera.cy;
-    if (!(u >= 0 && v >= 0 && u < w && v < h)) continue;
-    const std::size_t pixel =
-        static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u);
+    Vec3 t;
+    int px, py;
+    if (!CentrePixel(model, i, camera, &t, &px, &py)) continue;
+    const std::size_t pixel = static_cast<std::size_t>(py) * w + px;
     const float d = depth[pixel];
     if (!mask[pixel] || !(d > 0)) continue;
     given[i] = T(d);
