@@ -330,6 +330,12 @@ int RunFitCommand(FitCommandOptions o) {
       }
     }
     last = trainer.Step();
+    if (expansion && o.expansion.carve_every > 0 &&
+        trainer.iteration() % o.expansion.carve_every == 0) {
+      const Timer carve;
+      expansion->Carve(&trainer);
+      expansion_seconds += carve.WallSeconds();
+    }
     window_loss += last.loss;
     window_l1 += last.l1;
     window_depth += last.depth;
@@ -468,7 +474,8 @@ int RunFitCommand(FitCommandOptions o) {
       {"expansion", expansion
                         ? nlohmann::json{{"options", o.expansion.ToJson()},
                                          {"prior_cmd", o.prior_cmd},
-                                         {"steps", expansion_steps}}
+                                         {"steps", expansion_steps},
+                                         {"carved", expansion->carved()}}
                         : nlohmann::json()},
       {"final_loss", last.loss},
       {"train_psnr", train_psnr},
@@ -501,10 +508,13 @@ int RunFitCommand(FitCommandOptions o) {
       "time", seconds, init_seconds, t.forward, t.loss, t.backward, t.motion,
       t.optimise, t.densify, t.compose, validation_seconds);
   if (expansion) {
-    std::printf("  %-22s %zu steps, %.1f s, %zu refinement views%s\n",
-                "expansion", expansion_steps.size(), expansion_seconds,
-                expansion->refinement_views(),
-                panorama_only ? " (validation: the panorama results)" : "");
+    std::printf(
+        "  %-22s %zu steps, %.1f s, %zu refinement views, %lld static "
+        "Gaussians in seen free space removed%s\n",
+        "expansion", expansion_steps.size(), expansion_seconds,
+        expansion->refinement_views(),
+        static_cast<long long>(expansion->carved()),
+        panorama_only ? " (validation: the panorama results)" : "");
   } else {
     std::printf("  %-22s none (%s)\n", "expansion",
                 o.no_expansion ? "--no-expansion" : "run too short");
@@ -613,6 +623,12 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--refine-weight", o->expansion.refine_weight,
                   "Weight of L_refine on the expanded views")
       ->capture_default_str();
+  sub->add_option("--carve-every", o->expansion.carve_every,
+                  "Every N iterations once an expansion step has ran, remove "
+                  "the static Gaussians that a training frame or an expanded "
+                  "view's warp sees through (floaters L_refine, masked to "
+                  "M_e, does not reach); 0: only at the steps")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--refine-every", o->expansion.refine_every,
                   "L_refine on one expanded view every N iterations")
       ->capture_default_str();

@@ -697,6 +697,33 @@ std::int64_t Trainer::AddStaticGaussians(const GaussianModel& extra) {
   return count;
 }
 
+std::int64_t Trainer::RemoveStaticGaussians(
+    const std::vector<std::uint8_t>& keep) {
+  const std::size_t ns = scene_.statics.size();
+  if (keep.size() != ns) {
+    throw Error(
+        "trainer", "keep", std::to_string(keep.size()),
+        "expected one flag per static Gaussian (" + std::to_string(ns) + ")");
+  }
+  const auto removed = static_cast<std::int64_t>(
+      std::count(keep.begin(), keep.end(), std::uint8_t{0}));
+  if (removed == 0) return 0;
+  KeepGaussianRows(keep, &scene_.statics);
+  static_adam_.KeepRows(keep);
+  // Densification statistics are in composed order: statics, then dynamics.
+  const auto drop = [&](auto* v) {
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < v->size(); ++i)
+      if (i >= ns || keep[i]) (*v)[out++] = (*v)[i];
+    v->resize(out);
+  };
+  drop(&grad_accum_);
+  drop(&max_radius_);
+  drop(&grad_count_);
+  pruned_total_ += removed;
+  return removed;
+}
+
 void Trainer::ResetOpacities() {
   const float cap = InverseSigmoid(kResetOpacity);
   for (float& o : scene_.statics.opacities) o = std::min(o, cap);

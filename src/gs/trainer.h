@@ -166,6 +166,9 @@ class Trainer {
   // Beyond max_gaussians the rows that do not fit are dropped. Returns the
   // count added.
   std::int64_t AddStaticGaussians(const GaussianModel& extra);
+  // Removes the static Gaussians whose `keep` is 0 (one per static row), with
+  // their optimiser state. Counted in pruned_total(). Returns the count.
+  std::int64_t RemoveStaticGaussians(const std::vector<std::uint8_t>& keep);
 
   const GaussianScene& scene() const { return scene_; }
   const std::vector<TrainingView>& views() const { return views_; }

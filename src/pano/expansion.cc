@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <deque>
 #include <numeric>
 #include <sstream>
 
@@ -18,6 +17,7 @@
 #include "src/geometry/inpaint.h"
 #include "src/geometry/point_cloud.h"
 #include "src/gs/init.h"
+#include "src/pano/free_space.h"
 #include "src/pano/warp.h"
 
 namespace pano4d {
@@ -70,48 +70,19 @@ cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
   return depth;
 }
 
-// A view through which something was seen: its camera and z-depth of the
-// surfaces it saw (0 = nothing known).
-struct SeenDepth {
-  RasterCamera camera;
-  const float* depth;
-};
-
-// Unseen content lies where nothing looked through: a candidate point that
-// a training frame, or an expanded view where the warp brought a seen
-// surface, sees in front of that surface (by more than
-// kFreeSpaceTolerance, relative) is in space known to be empty, and would
-// hang in front of that surface in novel views.
-constexpr float kFreeSpaceTolerance = 0.05f;
-
-// Drops the points (and their depths) that a view sees through. Returns
-// the count dropped.
-std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& seen_by,
+// Drops the points (and their depths) in known empty space (free_space.h).
+// Returns the count dropped.
+std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& frames,
+                                    const std::vector<SeenDepth>& expanded,
                                     PointCloud* points,
                                     std::vector<double>* depths) {
-  std::vector<std::uint8_t> keep(points->size(), 1);
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < static_cast<std::int64_t>(points->size()); ++i) {
-    const Eigen::Vector3f& x = points->points[i];
-    for (const SeenDepth& v : seen_by) {
-      const Eigen::Vector3f c = v.camera.rotation * x + v.camera.translation;
-      if (!(c.z() > 0)) continue;
-      const float u = v.camera.fx * c.x() / c.z() + v.camera.cx;
-      const float w = v.camera.fy * c.y() / c.z() + v.camera.cy;
-      if (!(u >= 0 && w >= 0 && u < v.camera.width && w < v.camera.height))
-        continue;
-      const float seen = v.depth[static_cast<std::size_t>(w) * v.camera.width +
-                                 static_cast<std::size_t>(u)];
-      if (seen > 0 && c.z() < seen * (1 - kFreeSpaceTolerance)) {
-        keep[i] = 0;
-        break;
-      }
-    }
-  }
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  const std::vector<std::uint8_t> empty = InFreeSpace(
+      frames, expanded, points->points.front().data(), points->size());
   PointCloud kept;
   std::vector<double> kept_depths;
-  for (std::size_t i = 0; i < keep.size(); ++i) {
-    if (!keep[i]) continue;
+  for (std::size_t i = 0; i < empty.size(); ++i) {
+    if (empty[i]) continue;
     kept.points.push_back(points->points[i]);
     kept.colors.push_back(points->colors[i]);
     kept_depths.push_back((*depths)[i]);
@@ -194,6 +165,10 @@ void ExpansionOptions::Check() const {
   positive(time_stride, "time_stride");
   positive(new_gaussian_stride, "new_gaussian_stride");
   positive(voxel_pixels, "voxel_pixels");
+  if (carve_every < 0) {
+    throw Error("expansion options", "carve_every", std::to_string(carve_every),
+                "must be zero (only at the steps) or positive");
+  }
   if (!(refine_weight >= 0)) {
     throw Error("expansion options", "refine_weight",
                 std::to_string(refine_weight), "must be zero or positive");
@@ -213,6 +188,7 @@ nlohmann::json ExpansionOptions::ToJson() const {
           {"gaussian_refinement", gaussian_refinement},
           {"new_gaussian_stride", new_gaussian_stride},
           {"voxel_pixels", voxel_pixels},
+          {"carve_every", carve_every},
           {"seed", seed}};
 }
 
@@ -239,7 +215,8 @@ std::string ExpansionStepReport::Brief() const {
     << " views, holes " << 100 * hole_fraction << "% (chained "
     << 100 * prefilled_fraction << "% of them), " << new_gaussians
     << " new Gaussians (" << rejected_in_free_space
-    << " candidates in seen free space dropped), prior " << prior;
+    << " candidates in seen free space dropped; " << carved
+    << " Gaussians there removed), prior " << prior;
   if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
   s << ", " << seconds << " s";
   return s.str();
@@ -252,6 +229,7 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"hole_fraction", hole_fraction},
           {"prefilled_fraction", prefilled_fraction},
           {"rejected_in_free_space", rejected_in_free_space},
+          {"carved", carved},
           {"new_gaussians", new_gaussians},
           {"prior", prior},
           {"fallbacks", fallbacks},
@@ -295,6 +273,13 @@ void Expansion::Prepare(const Trainer& trainer) {
        i += static_cast<std::size_t>(options_.time_stride)) {
     const TrainingView& v = views[order[i]];
     sources_.push_back({order[i], v.camera, v.time});
+  }
+  frames_seen_.clear();
+  for (const TrainingView& v : views) {
+    if (v.depth.empty()) continue;
+    frames_seen_.push_back(MakeSeenDepth(
+        v.camera, cv::Mat(v.camera.height, v.camera.width, CV_32FC1,
+                          const_cast<float*>(v.depth.data()))));
   }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
   if (last_step_ > 0) {
@@ -374,12 +359,6 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   std::filesystem::remove_all(dir);
   std::vector<Refined> current(directions * ns);
   PointCloud points;
-  // Where the training frames and this step's warps saw surfaces (the warps
-  // before chaining: observed content only).
-  std::vector<SeenDepth> seen_by;
-  std::deque<cv::Mat> warped_depths;  // stable addresses
-  for (const TrainingView& v : views)
-    if (!v.depth.empty()) seen_by.push_back({v.camera, v.depth.data()});
   std::vector<double> point_depths, focals;
   double hole_sum = 0, holes = 0, prefilled = 0;
   Json cameras_json = Json::array();
@@ -392,8 +371,6 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       WarpResult w =
           ForwardWarp(rgb[s], depth[s], sources_[s].camera, v.camera);
       original_masks[s] = w.mask.clone();
-      warped_depths.push_back(w.depth.clone());
-      seen_by.push_back({v.camera, warped_depths.back().ptr<float>()});
       const int hole = cv::countNonZero(w.mask);
       hole_sum += static_cast<double>(hole) / w.mask.total();
       holes += hole;
@@ -456,6 +433,8 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
         }
       }
       focals.push_back(0.5 * (c.fx + c.fy));
+      expanded_seen_.push_back(
+          MakeSeenDepth(c, refined_depth, original_masks[s]));
       StoredView stored{c, v.t, cv::Mat(), original_masks[s] / 255};
       refined.convertTo(stored.target, CV_8UC3, 255.0);
       views_.push_back(std::move(stored));
@@ -470,9 +449,16 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
   report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
 
+  // New Gaussians are checked against this step's views.
+  const std::vector<SeenDepth> step_views(
+      expanded_seen_.end() -
+          static_cast<std::ptrdiff_t>(options_.gaussian_refinement ? cams.size()
+                                                                   : 0),
+      expanded_seen_.end());
+  if (options_.gaussian_refinement) report.carved = Carve(trainer);
   if (options_.gaussian_refinement && points.size() > 0) {
-    report.rejected_in_free_space =
-        KeepOutOfSeenFreeSpace(seen_by, &points, &point_depths);
+    report.rejected_in_free_space = KeepOutOfSeenFreeSpace(
+        frames_seen_, step_views, &points, &point_depths);
   }
   if (options_.gaussian_refinement && points.size() > 0) {
     const double voxel =
@@ -490,6 +476,19 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   return report;
+}
+
+std::int64_t Expansion::Carve(Trainer* trainer) {
+  if (views_.empty()) return 0;
+  const GaussianModel& statics = trainer->scene().statics;
+  if (statics.size() == 0) return 0;
+  const std::vector<std::uint8_t> empty = InFreeSpace(
+      frames_seen_, expanded_seen_, statics.means.data(), statics.size());
+  std::vector<std::uint8_t> keep(empty.size());
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = !empty[i];
+  const std::int64_t removed = trainer->RemoveStaticGaussians(keep);
+  carved_ += removed;
+  return removed;
 }
 
 const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
@@ -547,18 +546,18 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
       const std::string& id = v.name;
       const cv::Mat refined =
           ReadRefined(dm / "refined" / (id + ".png"), v.camera);
-      if (options_.gaussian_refinement) {
-        const std::filesystem::path mask_path = dm / "mask" / (id + ".png");
-        const cv::Mat mask = ReadMask(mask_path);
-        CheckSize(mask_path, mask.cols, mask.rows, v.camera);
-        StoredView stored{v.camera, v.t, cv::Mat(), mask / 255};
-        refined.convertTo(stored.target, CV_8UC3, 255.0);
-        views_.push_back(std::move(stored));
-      }
-      if (e == last_step) {
-        const cv::Mat depth = ReadDepth(dm / "depth" / (id + ".npy"), v.camera);
-        previous_[k] = {v.camera, refined.clone(), depth};
-      }
+      const bool last = e == last_step;
+      if (!options_.gaussian_refinement && !last) continue;
+      const cv::Mat depth = ReadDepth(dm / "depth" / (id + ".npy"), v.camera);
+      if (last) previous_[k] = {v.camera, refined.clone(), depth};
+      if (!options_.gaussian_refinement) continue;
+      const std::filesystem::path mask_path = dm / "mask" / (id + ".png");
+      const cv::Mat mask = ReadMask(mask_path);
+      CheckSize(mask_path, mask.cols, mask.rows, v.camera);
+      expanded_seen_.push_back(MakeSeenDepth(v.camera, depth, mask));
+      StoredView stored{v.camera, v.t, cv::Mat(), mask / 255};
+      refined.convertTo(stored.target, CV_8UC3, 255.0);
+      views_.push_back(std::move(stored));
     }
     all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
   }

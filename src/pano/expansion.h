@@ -10,6 +10,7 @@
 
 #include "src/gs/trainer.h"
 #include "src/pano/frame.h"
+#include "src/pano/free_space.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory.h"
 
@@ -39,6 +40,12 @@ struct ExpansionOptions {
   // the median depth.
   int new_gaussian_stride = 2;
   double voxel_pixels = 2.0;
+  // Free-space carving (Carve): every carve_every iterations once a step has
+  // run, and at every step, static Gaussians in known empty space are
+  // removed. L_refine supervises M_e
+  // only, so nothing else removes a floater in front of the warped content.
+  // 0: only at the steps.
+  int carve_every = 100;
   std::uint64_t seed = 0;
 
   void Check() const;  // throws pano4d::Error naming the field
@@ -58,8 +65,9 @@ struct ExpansionStepReport {
   double prefilled_fraction = 0.0;  // of M_e, filled by chaining step e-1
   std::int64_t new_gaussians = 0;
   std::int64_t rejected_in_free_space =
-      0;              // candidates a video frame saw through
-  std::string prior;  // the prior that filled (or "command -> geometry")
+      0;                    // candidates a video frame or a warp saw through
+  std::int64_t carved = 0;  // static Gaussians removed by Carve first
+  std::string prior;        // the prior that filled (or "command -> geometry")
   int fallbacks = 0;
   double seconds = 0.0;
   std::string Brief() const;
@@ -82,6 +90,13 @@ class Expansion {
   // nothing (rendered alpha < 0.5) and no training frame saw empty space;
   // refinement views (L_refine on M_e) queued.
   ExpansionStepReport RunStep(Trainer* trainer, int e);
+
+  // Removes the static Gaussians whose centre lies in known empty space
+  // (InFreeSpace, free_space.h): seen through by a training frame, or seen
+  // by none and seen through by a stored view's warp or by most stored
+  // views. Nothing before the first step. Returns the count.
+  std::int64_t Carve(Trainer* trainer);
+  std::int64_t carved() const { return carved_; }
 
   // The Trainer::extra_view hook: a refinement view for this iteration,
   // chosen by (seed, iteration) alone so that a resumed run picks the same.
@@ -143,6 +158,10 @@ class Expansion {
   RasterCamera reference_;
   std::vector<Source> sources_;
   std::vector<StoredView> views_;
+  // What the training frames saw, and per stored view its refined depth
+  // (the warp's, and the prior's in M_e) for Carve.
+  std::vector<SeenDepth> frames_seen_, expanded_seen_;
+  std::int64_t carved_ = 0;
   std::vector<ExpandedView> all_cameras_;
   int last_step_ = 0;
   std::vector<Refined> previous_;  // directions x sources, step last_step_

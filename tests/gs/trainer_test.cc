@@ -256,6 +256,51 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   EXPECT_THROW(trainer.AddStaticGaussians(wrong_degree), Error);
 }
 
+// The expansion's free-space carving removes static rows: the dynamic ones,
+// the optimiser state and the densification statistics follow, and the run
+// goes on and resumes.
+TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
+  testing::TempDir dir;
+  GaussianScene teacher = StaticTeacher();
+  teacher.num_times = 2;
+  teacher.dynamics = RandomViewFillingScene(100, CameraAt(0), 4.0f, 5);
+  teacher.bases.Reset(1, 2);
+  teacher.logits.assign(teacher.dynamics.size(), 0.0f);
+  const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 1});
+  TrainerOptions options = FastOptions(30);
+  options.densify_from = 10;  // statistics must follow the removed rows
+  options.densify_every = 10;
+  options.densify_gradient = 1e-6;  // densify plenty
+  Trainer trainer(Perturbed(teacher, 5), views, options);
+  for (int i = 0; i < 5; ++i) trainer.Step();
+  const GaussianModel statics = trainer.scene().statics;
+  const GaussianModel dynamics = trainer.scene().dynamics;
+  std::vector<std::uint8_t> keep(statics.size(), 1);
+  for (std::size_t i = 0; i < keep.size(); i += 3) keep[i] = 0;
+  const std::int64_t pruned = trainer.pruned_total();
+  const std::int64_t removed = trainer.RemoveStaticGaussians(keep);
+  EXPECT_EQ(removed, static_cast<std::int64_t>((statics.size() + 2) / 3));
+  EXPECT_EQ(trainer.pruned_total(), pruned + removed);
+  ASSERT_EQ(trainer.scene().statics.size(), statics.size() - removed);
+  EXPECT_EQ(trainer.scene().statics.means[0], statics.means[3]);  // row 1
+  EXPECT_EQ(trainer.scene().dynamics.means, dynamics.means);
+  EXPECT_EQ(trainer.RemoveStaticGaussians(
+                std::vector<std::uint8_t>(trainer.scene().statics.size(), 1)),
+            0);
+  while (!trainer.Done()) {
+    const StepReport r = trainer.Step();
+    ASSERT_TRUE(std::isfinite(r.loss));
+    EXPECT_EQ(r.skipped_rows, 0);
+  }
+  EXPECT_GT(trainer.densified_total(), 0);
+  trainer.SaveCheckpoint(dir / "a.ckpt");
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options);
+  resumed.LoadCheckpoint(dir / "a.ckpt");
+  EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
+  EXPECT_THROW(trainer.RemoveStaticGaussians(std::vector<std::uint8_t>(3, 1)),
+               Error);
+}
+
 TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {0.0f}, {0});

@@ -1,12 +1,16 @@
 #include "src/pano/expansion.h"
 
 #include <filesystem>
+#include <optional>
 #include <set>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/core/npy.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 #include "tests/support/test_files.h"
@@ -23,10 +27,18 @@ RasterCamera CameraAt(float x) {
 }
 
 // A static scene seen by four cameras along x at times 0..3, and a trainer
-// holding a copy of it (as if fitted).
-std::unique_ptr<Trainer> MakeTrainer() {
+// holding a copy of it (as if fitted). The Gaussians fill depths 2 to 4, or
+// with `surface` lie within 1% of depth 3, as a fit leaves them on a surface.
+std::unique_ptr<Trainer> MakeTrainer(bool surface = false) {
   GaussianScene scene;
   scene.statics = RandomViewFillingScene(800, CameraAt(0), 3.0f, 5);
+  if (surface) {
+    std::vector<float>& means = scene.statics.means;
+    for (std::size_t i = 0; i < means.size(); i += 3) {
+      const float z = means[i + 2], to = 3.0f + 0.015f * (z - 3.0f);
+      for (int k = 0; k < 3; ++k) means[i + k] *= to / z;  // same pixel
+    }
+  }
   scene.dynamics.sh_degree = scene.statics.sh_degree;
   scene.num_times = 4;
   std::vector<TrainingView> views;
@@ -106,7 +118,7 @@ TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   EXPECT_EQ(r1.prefilled_fraction, 0.0);  // nothing to chain from
   EXPECT_GT(r1.new_gaussians, 0);
   EXPECT_EQ(trainer->scene().statics.size(),
-            before + static_cast<std::size_t>(r1.new_gaussians));
+            before + static_cast<std::size_t>(r1.new_gaussians - r1.carved));
   EXPECT_EQ(r1.prior, "geometry");
   for (const char* kind : {"warped", "mask", "refined"})
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_1" /
@@ -163,6 +175,64 @@ TEST(ExpansionTest, ReloadServesTheSameViewsAsTheRunThatWroteThem) {
   std::filesystem::remove_all(dir.path() / "step_01");
   Expansion broken(SmallOptions(), dir.path(), &prior);
   EXPECT_THROW(broken.Reload(*trainer, 2), Error);
+}
+
+// L_refine supervises M_e only; a static floater in front of content the
+// warp brought into an expanded view is removed by the carving, also where
+// no training frame sees it.
+TEST(ExpansionTest, CarvingRemovesAFloaterOnlyAWarpSeesThrough) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer(/*surface=*/true);
+  GeometryPrior prior;
+  Expansion expansion(SmallOptions(), dir.path(), &prior);
+  EXPECT_EQ(expansion.Carve(trainer.get()), 0);  // nothing before a step
+  const std::size_t before = trainer->scene().statics.size();
+  const ExpansionStepReport r = expansion.RunStep(trainer.get(), 1);
+  // The fitted scene stands: its Gaussians lie on what the frames saw.
+  EXPECT_LT(r.carved, static_cast<std::int64_t>(before / 50)) << r.carved;
+  EXPECT_EQ(expansion.Carve(trainer.get()), 0);  // nothing changed since
+
+  // A point half way to a warped surface of an expanded view, out of every
+  // training frame's sight.
+  std::vector<SeenDepth> frames;
+  for (const TrainingView& v : trainer->views())
+    frames.push_back(
+        MakeSeenDepth(v.camera, cv::Mat(kHeight, kWidth, CV_32FC1,
+                                        const_cast<float*>(v.depth.data()))));
+  std::optional<Eigen::Vector3f> floater;
+  for (const ExpandedView& v : expansion.cameras()) {
+    const std::filesystem::path d =
+        dir.path() / "step_01" / ("dir_" + std::to_string(v.m));
+    const cv::Mat mask = cv::imread((d / "mask" / (v.name + ".png")).string(),
+                                    cv::IMREAD_GRAYSCALE);
+    const std::vector<float> depth =
+        ReadNpy(d / "depth" / (v.name + ".npy")).ToFloats();
+    const RasterCamera& c = v.camera;
+    for (int y = 1; y + 1 < kHeight && !floater; ++y) {
+      for (int x = 1; x + 1 < kWidth && !floater; ++x) {
+        // The warp's surface all around (the test spares its edges).
+        if (cv::countNonZero(mask(cv::Rect(x - 1, y - 1, 3, 3))) > 0) continue;
+        const float z = 0.5f * depth[y * kWidth + x];
+        const Eigen::Vector3f p =
+            c.rotation.transpose() *
+            (Eigen::Vector3f((x + 0.5f - c.cx) / c.fx * z,
+                             (y + 0.5f - c.cy) / c.fy * z, z) -
+             c.translation);
+        if (Look(frames, p) == Sight::kUnseen) floater = p;
+      }
+    }
+    if (floater) break;
+  }
+  ASSERT_TRUE(floater) << "no point that only a warp sees through";
+  GaussianModel one = RandomViewFillingScene(1, CameraAt(0), 3.0f, 1);
+  for (int k = 0; k < 3; ++k) one.means[k] = (*floater)[k];
+  ASSERT_EQ(trainer->AddStaticGaussians(one), 1);
+  EXPECT_EQ(expansion.Carve(trainer.get()), 1);
+  EXPECT_EQ(expansion.carved(), r.carved + 1);
+  const std::vector<float>& means = trainer->scene().statics.means;
+  for (std::size_t i = 0; i < means.size(); i += 3)
+    ASSERT_FALSE(means[i] == (*floater)[0] && means[i + 1] == (*floater)[1] &&
+                 means[i + 2] == (*floater)[2]);
 }
 
 TEST(ExpansionTest, WithoutGaussianRefinementNothingIsDistilled) {

@@ -1,0 +1,74 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "src/render/rasterizer.h"
+
+namespace pano4d {
+
+// Free-space carving for the expansion. A view through which surfaces were
+// seen: its camera and the z-depth of what it saw. A point that it sees in
+// front of its surface, by more than kFreeSpaceTolerance (relative), would
+// hang in front of that surface in novel views.
+struct SeenDepth {
+  RasterCamera camera;
+  cv::Mat depth;  // CV_32FC1, conservative (MakeSeenDepth); 0 = unknown
+  // CV_8UC1: 1 where the depth all around was observed (the frames, or a
+  // warp of them), 0 where some of it is the prior's guess (M_e). Empty:
+  // observed everywhere.
+  cv::Mat observed;
+};
+
+// Relative depth margin in front of a seen surface that still counts as the
+// surface (depth noise, Gaussians' extent).
+constexpr float kFreeSpaceTolerance = 0.05f;
+
+// A point that no frame saw and that more than kFreeSpaceVotes times as
+// many expanded views see through (guessed depth included) as have it on
+// their surface, is in empty space: the views agree that something else is
+// there (free-space violations against support, as in depth-map fusion,
+// Merrell et al. 2007). 4: on the small synthetic scene it removes the
+// floaters that blurred covisible pixels and keeps most unseen content
+// (docs/ARCHITECTURE.md).
+constexpr int kFreeSpaceVotes = 4;
+
+// The view's depth made conservative for the test: each pixel holds the
+// nearest depth of its 3x3 neighbourhood, and a pixel next to an unknown one
+// (0 or not finite) is unknown. A point by a depth edge then is not taken
+// for one seen through because its centre landed a pixel off. `guessed`
+// (CV_8UC1, non-zero = depth from a prior, not observed; empty: none) marks
+// the guesses, spread the same way. Throws pano4d::Error when the depth is
+// not CV_32FC1 of the camera's size, or `guessed` not CV_8UC1 of it.
+SeenDepth MakeSeenDepth(const RasterCamera& camera, const cv::Mat& depth,
+                        const cv::Mat& guessed = cv::Mat());
+
+// What views know of a point.
+enum class Sight {
+  kUnseen,      // outside them all, or hidden behind their surfaces
+  kOnSurface,   // within kFreeSpaceTolerance of a surface one of them saw
+  kSeenThrough  // in front of a surface one of them saw
+};
+// One view; `observed` (optional) tells whether that depth was observed.
+Sight LookFrom(const SeenDepth& view, const Eigen::Vector3f& point,
+               bool* observed = nullptr);
+// Any view that sees through it decides, then any that has it on its
+// surface.
+Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point);
+
+// Which of `count` points (xyz rows) lie in known empty space (parallel;
+// 1 = empty):
+// - seen through by a video frame (`frames`: what the video observed);
+// - else, when no frame saw it (a frame that has it on its surface keeps
+//   it: an expanded view shows one frame's content, none of what other
+//   frames saw): seen through by an expanded view where its depth is
+//   observed (a warp), or by more than kFreeSpaceVotes times as many
+//   expanded views as have it on their surface.
+std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
+                                      const std::vector<SeenDepth>& expanded,
+                                      const float* xyz, std::size_t count);
+
+}  // namespace pano4d
