@@ -624,10 +624,12 @@ void AddFitCommand(CLI::App& app, Action* action) {
                   "Weight of L_refine on the expanded views")
       ->capture_default_str();
   sub->add_option("--carve-every", o->expansion.carve_every,
-                  "Every N iterations once an expansion step has ran, remove "
-                  "the static Gaussians that a training frame or an expanded "
-                  "view's warp sees through (floaters L_refine, masked to "
-                  "M_e, does not reach); 0: only at the steps")
+                  "Every N iterations once an expansion step has run (and at "
+                  "every step), remove the static Gaussians in known empty "
+                  "space: seen through by a training frame, or seen by none "
+                  "and seen through by an expanded view's warp or by most "
+                  "expanded views (floaters that L_refine, masked to M_e, "
+                  "does not reach); 0: only at the steps")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--refine-every", o->expansion.refine_every,
                   "L_refine on one expanded view every N iterations")

@@ -1,5 +1,6 @@
 #include "src/pano/free_space.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/imgproc.hpp>
@@ -54,7 +55,7 @@ Sight LookFrom(const SeenDepth& view, const Eigen::Vector3f& point,
   if (!(u >= 0 && w >= 0 && u < c.width && w < c.height)) return Sight::kUnseen;
   const int x = static_cast<int>(u), y = static_cast<int>(w);
   const float seen = view.depth.at<float>(y, x);
-  if (!(seen > 0)) return Sight::kUnseen;
+  if (!(seen > 0)) return Sight::kUnknown;
   if (observed)
     *observed = view.observed.empty() || view.observed.at<std::uint8_t>(y, x);
   if (p.z() < seen * (1 - kFreeSpaceTolerance)) return Sight::kSeenThrough;
@@ -63,11 +64,11 @@ Sight LookFrom(const SeenDepth& view, const Eigen::Vector3f& point,
 }
 
 Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point) {
-  Sight sight = Sight::kUnseen;
+  Sight sight = Sight::kUnseen;  // the enumerators rise in precedence
   for (const SeenDepth& v : views) {
     const Sight s = LookFrom(v, point);
     if (s == Sight::kSeenThrough) return s;
-    if (s == Sight::kOnSurface) sight = s;
+    sight = std::max(sight, s);
   }
   return sight;
 }
@@ -84,18 +85,19 @@ std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
       empty[i] = by_frames == Sight::kSeenThrough;
       continue;
     }
+    bool warp_saw_through = false;
     int through = 0, on = 0;
     for (const SeenDepth& v : expanded) {
       bool observed = false;
       const Sight s = LookFrom(v, p, &observed);
       if (s == Sight::kSeenThrough && observed) {
-        through = -1;  // a warp of the frames saw through it
+        warp_saw_through = true;
         break;
       }
       through += s == Sight::kSeenThrough;
       on += s == Sight::kOnSurface;
     }
-    empty[i] = through < 0 || through > kFreeSpaceVotes * on;
+    empty[i] = warp_saw_through || through > kFreeSpaceVotes * on;
   }
   return empty;
 }

@@ -49,6 +49,7 @@ SeenDepth MakeSeenDepth(const RasterCamera& camera, const cv::Mat& depth,
 // What views know of a point.
 enum class Sight {
   kUnseen,      // outside them all, or hidden behind their surfaces
+  kUnknown,     // inside one of them where its depth is unknown
   kOnSurface,   // within kFreeSpaceTolerance of a surface one of them saw
   kSeenThrough  // in front of a surface one of them saw
 };
@@ -56,7 +57,7 @@ enum class Sight {
 Sight LookFrom(const SeenDepth& view, const Eigen::Vector3f& point,
                bool* observed = nullptr);
 // Any view that sees through it decides, then any that has it on its
-// surface.
+// surface, then any that does not know.
 Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point);
 
 // Which of `count` points (xyz rows) lie in known empty space (parallel;
@@ -64,9 +65,10 @@ Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point);
 // - seen through by a video frame (`frames`: what the video observed);
 // - else, when no frame saw it (a frame that has it on its surface keeps
 //   it: an expanded view shows one frame's content, none of what other
-//   frames saw): seen through by an expanded view where its depth is
-//   observed (a warp), or by more than kFreeSpaceVotes times as many
-//   expanded views as have it on their surface.
+//   frames saw; so does a frame without depth there, as stereo leaves
+//   holes): seen through by an expanded view where its depth is observed
+//   (a warp), or by more than kFreeSpaceVotes times as many expanded views
+//   as have it on their surface.
 std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
                                       const std::vector<SeenDepth>& expanded,
                                       const float* xyz, std::size_t count);

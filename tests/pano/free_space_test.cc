@@ -58,6 +58,7 @@ TEST(FreeSpaceTest, NothingIsClaimedAtOrNextToUnknownDepth) {
     EXPECT_FALSE(SeenThrough(seen, At(x, y, 2.0f))) << x << "," << y;
   }
   EXPECT_TRUE(SeenThrough(seen, At(12, 10, 2.0f)));  // two pixels away
+  EXPECT_EQ(Look(seen, At(11, 11, 2.0f)), Sight::kUnknown);
 }
 
 TEST(FreeSpaceTest, APointByADepthEdgeIsNotTakenForOneSeenThrough) {
@@ -107,6 +108,17 @@ TEST(FreeSpaceTest, AWarpClearsOnlyWhatNoFrameSaw) {
             (std::vector<std::uint8_t>{0, 1, 1, 0}));
   // Without expanded views only the frame's free space is known.
   EXPECT_EQ(InFreeSpace(frames, {}, xyz.data(), 4),
+            (std::vector<std::uint8_t>{0, 1, 0, 0}));
+  // A frame without depth where the point lands (a stereo hole) may have
+  // seen it: the warp does not decide there.
+  RasterCamera wide = Camera();
+  wide.translation = Eigen::Vector3f(1.0f, 0, 2.0f);  // sees `unseen`
+  cv::Mat holey(kHeight, kWidth, CV_32FC1, 1.0f);
+  holey.colRange(10, 30).setTo(0.0f);
+  const std::vector<SeenDepth> with_hole = {frames[0],
+                                            MakeSeenDepth(wide, holey)};
+  ASSERT_EQ(Look(with_hole, unseen), Sight::kUnknown);
+  EXPECT_EQ(InFreeSpace(with_hole, warps, xyz.data(), 4),
             (std::vector<std::uint8_t>{0, 1, 0, 0}));
 }
 
