@@ -630,7 +630,8 @@ void AddFitCommand(CLI::App& app, Action* action) {
                   "and seen through by an expanded view's warp or by most "
                   "expanded views (floaters that L_refine, masked to M_e, "
                   "does not reach); 0: only at the steps")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sub->add_option("--refine-every", o->expansion.refine_every,
                   "L_refine on one expanded view every N iterations")
       ->capture_default_str();

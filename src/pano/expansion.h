@@ -42,9 +42,8 @@ struct ExpansionOptions {
   double voxel_pixels = 2.0;
   // Free-space carving (Carve): every carve_every iterations once a step has
   // run, and at every step, static Gaussians in known empty space are
-  // removed. L_refine supervises M_e
-  // only, so nothing else removes a floater in front of the warped content.
-  // 0: only at the steps.
+  // removed. L_refine supervises M_e only, so nothing else removes a
+  // floater in front of the warped content. 0: only at the steps.
   int carve_every = 100;
   std::uint64_t seed = 0;
 
@@ -65,7 +64,7 @@ struct ExpansionStepReport {
   double prefilled_fraction = 0.0;  // of M_e, filled by chaining step e-1
   std::int64_t new_gaussians = 0;
   std::int64_t rejected_in_free_space =
-      0;                    // candidates a video frame or a warp saw through
+      0;                    // candidates in known empty space (InFreeSpace)
   std::int64_t carved = 0;  // static Gaussians removed by Carve first
   std::string prior;        // the prior that filled (or "command -> geometry")
   int fallbacks = 0;
