@@ -449,16 +449,15 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
   report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
 
-  // New Gaussians are checked against this step's views.
-  const std::vector<SeenDepth> step_views(
-      expanded_seen_.end() -
-          static_cast<std::ptrdiff_t>(options_.gaussian_refinement ? cams.size()
-                                                                   : 0),
-      expanded_seen_.end());
-  if (options_.gaussian_refinement) report.carved = Carve(trainer);
-  if (options_.gaussian_refinement && points.size() > 0) {
-    report.rejected_in_free_space = KeepOutOfSeenFreeSpace(
-        frames_seen_, step_views, &points, &point_depths);
+  if (options_.gaussian_refinement) {
+    report.carved = Carve(trainer);
+    if (points.size() > 0) {  // checked against this step's views
+      const std::vector<SeenDepth> step_views(
+          expanded_seen_.end() - static_cast<std::ptrdiff_t>(cams.size()),
+          expanded_seen_.end());
+      report.rejected_in_free_space = KeepOutOfSeenFreeSpace(
+          frames_seen_, step_views, &points, &point_depths);
+    }
   }
   if (options_.gaussian_refinement && points.size() > 0) {
     const double voxel =

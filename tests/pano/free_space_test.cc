@@ -6,27 +6,22 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/render/bench_scene.h"
 
 namespace pano4d {
 namespace {
 
 constexpr int kWidth = 40, kHeight = 30;
-constexpr float kFocal = 40.0f;
 
 RasterCamera Camera() {  // at the origin, looking down +z
-  RasterCamera c;
-  c.width = kWidth;
-  c.height = kHeight;
-  c.fx = c.fy = kFocal;
-  c.cx = kWidth / 2.0f;
-  c.cy = kHeight / 2.0f;
-  return c;
+  return BenchCamera(kWidth, kHeight);
 }
 
 // The world point that lands at the centre of pixel (x, y) at depth z.
 Eigen::Vector3f At(int x, int y, float z) {
-  return Eigen::Vector3f((x + 0.5f - kWidth / 2.0f) / kFocal * z,
-                         (y + 0.5f - kHeight / 2.0f) / kFocal * z, z);
+  const RasterCamera c = Camera();
+  return Eigen::Vector3f((x + 0.5f - c.cx) / c.fx * z,
+                         (y + 0.5f - c.cy) / c.fy * z, z);
 }
 
 bool SeenThrough(const std::vector<SeenDepth>& views,
@@ -89,7 +84,7 @@ TEST(FreeSpaceTest, AnyViewSuffices) {
 // A warp shows one frame's content in another camera, none of what other
 // frames saw: it is trusted to see through only what no frame saw.
 TEST(FreeSpaceTest, AWarpClearsOnlyWhatNoFrameSaw) {
-  RasterCamera side = Camera();  // at x = 1.5: sees x from -0.5 to 3.5 at 4
+  RasterCamera side = Camera();  // at x = 1.5: sees x from -0.7 to 3.7 at 4
   side.translation = Eigen::Vector3f(-1.5f, 0, 0);
   const std::vector<SeenDepth> frames = {
       MakeSeenDepth(side, cv::Mat(kHeight, kWidth, CV_32FC1, 4.0f))};
