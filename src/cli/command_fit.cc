@@ -207,6 +207,10 @@ void WarnIfNearThePlane(const std::vector<TrainingView>& views) {
 
 }  // namespace
 
+double DefaultDepthWeight(const std::string& depth_source) {
+  return depth_source == "dataset" ? kGivenDepthWeight : kEstimatedDepthWeight;
+}
+
 int RunFitCommand(FitCommandOptions o) {
   if (o.deterministic && o.time_budget > 0) {
     throw Error("--time-budget", "", std::to_string(o.time_budget),
@@ -231,6 +235,17 @@ int RunFitCommand(FitCommandOptions o) {
   PANO4D_LOG(kInfo) << "fit: " << frames.train.size() << " training and "
                     << frames.val.size() << " validation frames ("
                     << frames.source << ")";
+  o.trainer.depth_weight =
+      o.depth_weight.value_or(DefaultDepthWeight(frames.depth_source));
+  std::string why = "given";
+  if (!o.depth_weight) {
+    why = frames.depth_source.empty()
+              ? "frames.json does not say where the depth came from; "
+                "`pano4d depth` again records it"
+              : "depth from " + frames.depth_source;
+  }
+  PANO4D_LOG(kInfo) << "fit: depth weight " << o.trainer.depth_weight << " ("
+                    << why << ")";
   std::vector<TrainingView> views = LoadTrainingViews(frames.train);
   WarnIfNearThePlane(views);
   const std::vector<ValidationView> val = LoadValidation(frames.val);
@@ -594,9 +609,9 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--sh-degree", o->init.sh_degree,
                   "Spherical-harmonics degree of the colours (0-3)")
       ->capture_default_str();
-  sub->add_option("--depth-weight", o->trainer.depth_weight,
-                  "Weight of the depth loss")
-      ->capture_default_str();
+  sub->add_option("--depth-weight", o->depth_weight,
+                  "Weight of the depth loss (default: 5 on depth the dataset "
+                  "gives, 1 on estimated depth: stereo or --depth-dir)");
   sub->add_option("--normal-weight", o->trainer.normal_weight,
                   "Weight of the depth-normal flatness term: Gaussians on a "
                   "surface the depth maps show become discs in it (0: off)")

@@ -106,6 +106,7 @@ void WriteWorkspaceFrames(const fs::path& workspace,
     val.push_back(FrameToJson(workspace, f));
   WriteJson(FramesPath(workspace),
             {{"source", frames.source},
+             {"depth_source", frames.depth_source},
              {"dataset", Stored(workspace, frames.dataset)},
              {"dataset_factor", frames.dataset_factor},
              {"num_times", frames.num_times},
@@ -124,6 +125,7 @@ WorkspaceFrames ReadWorkspaceFrames(const fs::path& workspace) {
   const std::string source = path.string();
   WorkspaceFrames frames;
   frames.source = GetJsonOr<std::string>(j, "source", "", source);
+  frames.depth_source = GetJsonOr<std::string>(j, "depth_source", "", source);
   frames.num_times = GetJson<int>(j, "num_times", source);
   frames.dataset =
       Loaded(workspace, GetJsonOr<std::string>(j, "dataset", "", source));

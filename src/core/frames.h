@@ -24,6 +24,10 @@ struct WorkspaceFrame {
 
 struct WorkspaceFrames {
   std::string source;  // what the frames came from, for reports
+  // Where the training depth came from: "dataset" (the dataset's own:
+  // rendered, a depth sensor), "stereo" or "external" (estimated, aligned
+  // to the SfM points); empty in frames.json written before it was stored.
+  std::string depth_source;
   // The dataset the validation frames belong to (for `pano4d eval`), and
   // the resolution divisor they were loaded at; empty / 0 without one.
   std::filesystem::path dataset;

@@ -81,6 +81,16 @@ TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
   const nlohmann::json fit =
       nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
   EXPECT_EQ(fit.at("iterations").get<int>(), 40);
+  // The dataset gives the depth, so the depth loss has its given-depth
+  // weight (--depth-weight not passed).
+  const nlohmann::json frames =
+      nlohmann::json::parse(Slurp(ws / "pano4d/frames.json"));
+  EXPECT_EQ(frames.at("depth_source").get<std::string>(), "dataset");
+  EXPECT_EQ(fit.dump().find("\"depth_weight\":1.0"), std::string::npos);
+  EXPECT_NE(fit.dump().find("\"depth_weight\":5.0"), std::string::npos)
+      << fit.dump();
+  EXPECT_NE(Slurp(log).find("depth weight 5 (depth from dataset)"),
+            std::string::npos);
   EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
   EXPECT_GT(fit.at("motion_bases").get<int>(), 0);
   // A row every 10 iterations, validation values at 20 and 40.

@@ -91,6 +91,9 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
       fit.at("seconds").at("total").get<double>());
   // 65 frames: 0, 8, ..., 64 held out.
   EXPECT_EQ(held_out, 9u);
+  // Stereo depth keeps the estimated-depth weight of the depth loss.
+  EXPECT_EQ(frames.at("depth_source").get<std::string>(), "stereo");
+  EXPECT_NE(fit.dump().find("\"depth_weight\":1.0"), std::string::npos);
   EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
   EXPECT_FALSE(fit.at("expansion").at("steps").empty());
   // Measured (2 cores, 1000 iterations, an expansion every 400): held out

@@ -1,0 +1,161 @@
+#include "src/gs/init.h"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "evaluation/synth_cameras.h"
+#include "evaluation/synth_render.h"
+#include "evaluation/synth_scene.h"
+
+namespace pano4d {
+namespace {
+
+// The synthetic scene filmed as a short handheld video (24 frames at
+// 256x192, as the dynamic-mask test films it): a box that slides and turns,
+// a ball that rolls and a bending tube.
+constexpr int kWidth = 256, kHeight = 192, kFrames = 24;
+constexpr std::uint32_t kSeed = 1;
+
+std::vector<TrainingView> FilmSyntheticScene() {
+  const synth::Scene scene = synth::BuildScene(kSeed, false);
+  const double f = 0.9 * kWidth;
+  const Camera intrinsics{CameraModelId::kPinhole,
+                          kWidth,
+                          kHeight,
+                          {f, f, kWidth / 2.0, kHeight / 2.0}};
+  const std::vector<PosedCamera> cameras =
+      synth::TrainingTrajectory(scene, intrinsics, kFrames, kSeed);
+  std::vector<TrainingView> views;
+  for (int t = 0; t < kFrames; ++t) {
+    const synth::RenderedFrame frame = synth::RenderFrame(
+        scene, cameras[t], t / (kFrames - 1.0), /*shade=*/true, false);
+    TrainingView v;
+    v.name = "frame" + std::to_string(t);
+    v.time = t;
+    v.camera = RasterCamera::FromPosed(cameras[t]);
+    const cv::Mat& rgb = frame.rgb.mat();
+    v.rgb.assign(rgb.ptr<float>(), rgb.ptr<float>() + rgb.total() * 3);
+    v.depth.assign(frame.depth.ptr<float>(),
+                   frame.depth.ptr<float>() + frame.depth.total());
+    for (auto it = frame.dynamic.begin<std::uint8_t>();
+         it != frame.dynamic.end<std::uint8_t>(); ++it)
+      v.dynamic.push_back(*it ? 1 : 0);
+    views.push_back(std::move(v));
+  }
+  return views;
+}
+
+struct Coverage {
+  double covered = 0;   // share of moving surface points with a Gaussian near
+  double floating = 0;  // share of dynamic Gaussians a view sees through
+};
+
+// Each view's moving pixels (every 2nd) as surface points, against the
+// initial scene composed at that view's time: covered when a dynamic
+// Gaussian's centre lies within `radius`. And the dynamic Gaussians, posed
+// at each view's time, that the view sees more than 5% in front of its
+// depth: floaters the initialisation put where that view shows nothing.
+Coverage Measure(const GaussianScene& scene,
+                 const std::vector<TrainingView>& views, double radius) {
+  Coverage c;
+  std::int64_t points = 0, covered = 0, posed = 0, floating = 0;
+  GaussianModel composed;
+  const std::size_t first = scene.statics.size();
+  for (const TrainingView& v : views) {
+    scene.ComposeAt(v.time, &composed);
+    std::vector<Eigen::Vector3f> means;
+    for (std::size_t i = first; i < composed.size(); ++i) {
+      const Eigen::Vector3f mu(composed.means[i * 3], composed.means[i * 3 + 1],
+                               composed.means[i * 3 + 2]);
+      means.push_back(mu);
+      const Eigen::Vector3f cam = v.camera.rotation * mu + v.camera.translation;
+      if (!(cam.z() > 0)) continue;
+      const int x = static_cast<int>(
+          std::floor(v.camera.fx * cam.x() / cam.z() + v.camera.cx));
+      const int y = static_cast<int>(
+          std::floor(v.camera.fy * cam.y() / cam.z() + v.camera.cy));
+      if (x < 0 || y < 0 || x >= kWidth || y >= kHeight) continue;
+      const float depth = v.depth[static_cast<std::size_t>(y) * kWidth + x];
+      if (!(depth > 0)) continue;
+      ++posed;
+      if (cam.z() < 0.95f * depth) ++floating;
+    }
+    for (int y = 0; y < kHeight; y += 2) {
+      for (int x = 0; x < kWidth; x += 2) {
+        const std::size_t p = static_cast<std::size_t>(y) * kWidth + x;
+        if (!v.dynamic[p] || !(v.depth[p] > 0)) continue;
+        const float z = v.depth[p];
+        const Eigen::Vector3f cam((x + 0.5f - v.camera.cx) / v.camera.fx * z,
+                                  (y + 0.5f - v.camera.cy) / v.camera.fy * z,
+                                  z);
+        const Eigen::Vector3f world =
+            v.camera.rotation.transpose() * (cam - v.camera.translation);
+        ++points;
+        for (const Eigen::Vector3f& mu : means) {
+          if ((mu - world).norm() < radius) {
+            ++covered;
+            break;
+          }
+        }
+      }
+    }
+  }
+  c.covered = static_cast<double>(covered) / std::max<std::int64_t>(points, 1);
+  c.floating = static_cast<double>(floating) / std::max<std::int64_t>(posed, 1);
+  return c;
+}
+
+// The initial motion (bases from lifted flow tracks, k-means and one
+// Procrustes fit per cluster and frame) carries the canonical frame's
+// moving Gaussians through the clip: at every time most of what the view
+// shows of the moving objects has a Gaussian near, and few hang where the
+// view sees through them. The static part has no moving pixels in it.
+TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
+  const std::vector<TrainingView> views = FilmSyntheticScene();
+  InitReport report;
+  const GaussianScene scene =
+      InitializeScene(views, kFrames, InitOptions{}, &report);
+  ASSERT_GT(scene.dynamics.size(), 0u);
+  ASSERT_TRUE(scene.has_motion());
+  EXPECT_EQ(scene.canonical_time, kFrames / 2);
+  EXPECT_GT(report.tracks, 0);
+  EXPECT_GT(report.track_coverage, 0.5);
+  EXPECT_EQ(scene.logits.size(), scene.dynamics.size() * scene.bases.num_bases);
+
+  const Coverage c = Measure(scene, views, 3 * report.voxel_size);
+  RecordProperty("covered", std::to_string(c.covered));
+  RecordProperty("floating", std::to_string(c.floating));
+  // Measured: 0.918 covered, 0.257 floating (identity bases: 0.424 and
+  // 0.599). The floaters are the tracks'
+  // drift far from the canonical time (docs/ARCHITECTURE.md, "Moving
+  // pixels"), which the fit corrects only in part; the bound keeps it from
+  // growing.
+  EXPECT_GT(c.covered, 0.85);
+  EXPECT_LT(c.floating, 0.35);
+  // Against no motion at all (every basis the identity at every time), the
+  // fitted bases cover more and float less.
+  GaussianScene frozen = scene;
+  frozen.bases.Reset(scene.bases.num_bases, scene.bases.num_times);
+  const Coverage f = Measure(frozen, views, 3 * report.voxel_size);
+  RecordProperty("covered_frozen", std::to_string(f.covered));
+  RecordProperty("floating_frozen", std::to_string(f.floating));
+  EXPECT_GT(c.covered, f.covered + 0.1) << f.covered;
+  EXPECT_LT(c.floating, f.floating - 0.05) << f.floating;
+
+  // Without motion (K = 0) every pixel is static: no dynamic Gaussians,
+  // no bases, and more static points.
+  InitOptions still;
+  still.num_bases = 0;
+  InitReport still_report;
+  const GaussianScene static_scene =
+      InitializeScene(views, kFrames, still, &still_report);
+  EXPECT_EQ(static_scene.dynamics.size(), 0u);
+  EXPECT_FALSE(static_scene.has_motion());
+  EXPECT_GT(still_report.static_points_raw, report.static_points_raw);
+}
+
+}  // namespace
+}  // namespace pano4d
