@@ -11,11 +11,11 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "evaluation/synth_cameras.h"
 #include "evaluation/synth_generate.h"
 #include "evaluation/synth_render.h"
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "tests/support/synth_video.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -42,24 +42,12 @@ Video ReadSynthVideo(const fs::path& root, const std::string& resolution,
   return video;
 }
 
-// The synthetic scene filmed more densely than the "tiny" preset (whose 8
-// frames are 8 degrees of orbit apart, a baseline where flow fails in many
-// places): 24 frames at 256x192, 2.4 degrees apart, as a handheld video.
+// The dense synthetic video (tests/support/synth_video.h).
 Video RenderDenseVideo(bool is_static) {
-  constexpr int kWidth = 256, kHeight = 192, kFrames = 24;
-  constexpr std::uint32_t kSeed = 1;
-  const synth::Scene scene = synth::BuildScene(kSeed, is_static);
-  const double f = 0.9 * kWidth;
-  const Camera intrinsics{CameraModelId::kPinhole,
-                          kWidth,
-                          kHeight,
-                          {f, f, kWidth / 2.0, kHeight / 2.0}};
-  const std::vector<PosedCamera> cameras =
-      synth::TrainingTrajectory(scene, intrinsics, kFrames, kSeed);
+  const testing::DenseSynthVideo dense =
+      testing::FilmDenseSynthVideo(is_static);
   Video video;
-  for (int t = 0; t < kFrames; ++t) {
-    const synth::RenderedFrame frame = synth::RenderFrame(
-        scene, cameras[t], t / (kFrames - 1.0), /*shade=*/true, false);
+  for (const synth::RenderedFrame& frame : dense.frames) {
     video.frames.push_back(frame.rgb.ToBgr8());
     video.truth.push_back(frame.dynamic);
   }

@@ -6,36 +6,27 @@
 
 #include <gtest/gtest.h>
 
-#include "evaluation/synth_cameras.h"
-#include "evaluation/synth_render.h"
-#include "evaluation/synth_scene.h"
+#include "tests/support/synth_video.h"
 
 namespace pano4d {
 namespace {
 
-// The synthetic scene filmed as a short handheld video (24 frames at
-// 256x192, as the dynamic-mask test films it): a box that slides and turns,
-// a ball that rolls and a bending tube.
-constexpr int kWidth = 256, kHeight = 192, kFrames = 24;
-constexpr std::uint32_t kSeed = 1;
+using testing::DenseSynthVideo;
+constexpr int kWidth = DenseSynthVideo::kWidth;
+constexpr int kHeight = DenseSynthVideo::kHeight;
+constexpr int kFrames = DenseSynthVideo::kFrames;
 
+// The dense synthetic video (a box that slides and turns, a ball that
+// rolls and a bending tube) as the trainer's views, with its depth.
 std::vector<TrainingView> FilmSyntheticScene() {
-  const synth::Scene scene = synth::BuildScene(kSeed, false);
-  const double f = 0.9 * kWidth;
-  const Camera intrinsics{CameraModelId::kPinhole,
-                          kWidth,
-                          kHeight,
-                          {f, f, kWidth / 2.0, kHeight / 2.0}};
-  const std::vector<PosedCamera> cameras =
-      synth::TrainingTrajectory(scene, intrinsics, kFrames, kSeed);
+  const DenseSynthVideo video = testing::FilmDenseSynthVideo(false);
   std::vector<TrainingView> views;
   for (int t = 0; t < kFrames; ++t) {
-    const synth::RenderedFrame frame = synth::RenderFrame(
-        scene, cameras[t], t / (kFrames - 1.0), /*shade=*/true, false);
+    const synth::RenderedFrame& frame = video.frames[t];
     TrainingView v;
     v.name = "frame" + std::to_string(t);
     v.time = t;
-    v.camera = RasterCamera::FromPosed(cameras[t]);
+    v.camera = RasterCamera::FromPosed(video.cameras[t]);
     const cv::Mat& rgb = frame.rgb.mat();
     v.rgb.assign(rgb.ptr<float>(), rgb.ptr<float>() + rgb.total() * 3);
     v.depth.assign(frame.depth.ptr<float>(),
