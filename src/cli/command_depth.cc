@@ -171,7 +171,7 @@ WorkspaceFrames FramesFromDataset(const DepthCommandOptions& o) {
   const Dataset ds = LoadDataset(o.dataset, o.factor);
   WorkspaceFrames frames;
   frames.source = "dataset " + fs::absolute(o.dataset).string();
-  frames.depth_source = "dataset";
+  frames.depth_source = kDepthFromDataset;
   frames.dataset = fs::absolute(o.dataset);
   frames.dataset_factor = ds.factor;
   frames.num_times = ds.num_times;
@@ -494,10 +494,10 @@ int RunDepthCommand(const DepthCommandOptions& o) {
         &frames.train);
     if (o.depth_dir.empty()) {
       StereoDepth(o, model, &frames);
-      frames.depth_source = "stereo";
+      frames.depth_source = kDepthFromStereo;
     } else {
       AlignExternalDepth(o, model, &frames);
-      frames.depth_source = "external";
+      frames.depth_source = kDepthFromExternal;
     }
   }
   WriteWorkspaceFrames(o.workspace, frames);

@@ -208,7 +208,8 @@ void WarnIfNearThePlane(const std::vector<TrainingView>& views) {
 }  // namespace
 
 double DefaultDepthWeight(const std::string& depth_source) {
-  return depth_source == "dataset" ? kGivenDepthWeight : kEstimatedDepthWeight;
+  return depth_source == kDepthFromDataset ? kGivenDepthWeight
+                                           : kEstimatedDepthWeight;
 }
 
 int RunFitCommand(FitCommandOptions o) {

@@ -22,11 +22,17 @@ struct WorkspaceFrame {
   std::filesystem::path covisible;     // validation PNG; empty: none
 };
 
+// frames.json's depth_source: the dataset's own depth (rendered, a depth
+// sensor), or depth pano4d estimated (stereo, or another tool's maps
+// aligned to the SfM points).
+inline constexpr const char* kDepthFromDataset = "dataset";
+inline constexpr const char* kDepthFromStereo = "stereo";
+inline constexpr const char* kDepthFromExternal = "external";
+
 struct WorkspaceFrames {
   std::string source;  // what the frames came from, for reports
-  // Where the training depth came from: "dataset" (the dataset's own:
-  // rendered, a depth sensor), "stereo" or "external" (estimated, aligned
-  // to the SfM points); empty in frames.json written before it was stored.
+  // Where the training depth came from: one of kDepthFrom*; empty in
+  // frames.json written before it was stored.
   std::string depth_source;
   // The dataset the validation frames belong to (for `pano4d eval`), and
   // the resolution divisor they were loaded at; empty / 0 without one.
