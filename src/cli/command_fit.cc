@@ -639,13 +639,19 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--refine-weight", o->expansion.refine_weight,
                   "Weight of L_refine on the expanded views")
       ->capture_default_str();
+  sub->add_option("--refine-outside-weight", o->expansion.refine_outside_weight,
+                  "L_refine's weight on the warped pixels outside M_e, "
+                  "relative to those in it; 0: the paper's loss, masked to "
+                  "M_e (the Gaussians that fill M_e may then spread over "
+                  "the warped content)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sub->add_option("--carve-every", o->expansion.carve_every,
                   "Every N iterations once an expansion step has run (and at "
                   "every step), remove the static Gaussians in known empty "
                   "space: seen through by a training frame, or seen by none "
                   "and seen through by an expanded view's warp or by most "
-                  "expanded views (floaters that L_refine, masked to M_e, "
-                  "does not reach); 0: only at the steps")
+                  "expanded views; 0: only at the steps")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--refine-every", o->expansion.refine_every,

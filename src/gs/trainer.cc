@@ -489,13 +489,14 @@ StepReport Trainer::Step() {
           extra->target.size() == pixels * 3) {
         const double norm = 1.0 / (3.0 * count);
         for (std::size_t p = 0; p < pixels; ++p) {
-          if (!extra->mask[p]) continue;
+          const double w = extra->mask[p] ? 1.0 : extra->outside_weight;
+          if (w == 0.0) continue;
           for (int c = 0; c < 3; ++c) {
             const double e =
                 double(extra_out.rgb[p * 3 + c]) - extra->target[p * 3 + c];
-            sum += e * e;
+            sum += w * e * e;
             d_rgb_extra_[p * 3 + c] =
-                static_cast<float>(2.0 * extra->weight * norm * e);
+                static_cast<float>(2.0 * w * extra->weight * norm * e);
           }
         }
         report.extra = extra->weight * sum * norm;

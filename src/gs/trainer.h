@@ -96,14 +96,18 @@ struct TrainerOptions {
 };
 
 // What the expansion stage adds to a step (DESIGN.md, eq. refine): a view
-// at `camera` and `time` whose masked pixels should look like `target`;
-// loss weight * mean over the mask of |render - target|^2.
+// at `camera` and `time` that should look like `target`. The loss is
+//   weight / (3 |mask|) * (sum over the mask of |render - target|^2
+//                          + outside_weight * the same sum outside it),
+// the paper's masked MSE when outside_weight is 0; nothing when the mask is
+// empty.
 struct ExtraView {
   RasterCamera camera;
   int time = 0;
   std::vector<float> target;       // H x W x 3
-  std::vector<std::uint8_t> mask;  // H x W, 1 = supervised
+  std::vector<std::uint8_t> mask;  // H x W, 1 = M_e (generated content)
   double weight = 0.1;
+  double outside_weight = 0.0;
 };
 
 struct StepReport {

@@ -173,6 +173,11 @@ void ExpansionOptions::Check() const {
     throw Error("expansion options", "refine_weight",
                 std::to_string(refine_weight), "must be zero or positive");
   }
+  if (!(refine_outside_weight >= 0)) {
+    throw Error("expansion options", "refine_outside_weight",
+                std::to_string(refine_outside_weight),
+                "must be zero (the paper's masked loss) or positive");
+  }
 }
 
 nlohmann::json ExpansionOptions::ToJson() const {
@@ -182,6 +187,7 @@ nlohmann::json ExpansionOptions::ToJson() const {
           {"planar", geometry.planar},
           {"every", every},
           {"refine_weight", refine_weight},
+          {"refine_outside_weight", refine_outside_weight},
           {"refine_every", refine_every},
           {"time_stride", time_stride},
           {"one_step", one_step},
@@ -501,6 +507,7 @@ const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
   buffer_.camera = v.camera;
   buffer_.time = v.time;
   buffer_.weight = options_.refine_weight;
+  buffer_.outside_weight = options_.refine_outside_weight;
   buffer_.target.resize(v.target.total() * 3);
   const std::uint8_t* t = v.target.ptr<std::uint8_t>();
   for (std::size_t k = 0; k < buffer_.target.size(); ++k)

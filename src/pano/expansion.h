@@ -25,6 +25,13 @@ struct ExpansionOptions {
   // to ceil(E k / K).
   int every = 2000;
   double refine_weight = 0.1;  // L_refine
+  // L_refine's weight on the pixels outside M_e (the warped frames),
+  // relative to those in it; 0 is the paper's loss, masked to M_e. Masked,
+  // the Gaussians that fill M_e spread over the warped content around it,
+  // which no training frame sees from there: on the small synthetic scene
+  // 1 keeps validation mPSNR with expansion at that without it
+  // (docs/ARCHITECTURE.md).
+  double refine_outside_weight = 1.0;
   // L_refine on one expanded view every this many iterations.
   int refine_every = 1;
   // Source frames: every time_stride-th training frame in time order (the
@@ -42,8 +49,9 @@ struct ExpansionOptions {
   double voxel_pixels = 2.0;
   // Free-space carving (Carve): every carve_every iterations once a step has
   // run, and at every step, static Gaussians in known empty space are
-  // removed. L_refine supervises M_e only, so nothing else removes a
-  // floater in front of the warped content. 0: only at the steps.
+  // removed (a floater that no view's loss reaches: in front of a surface
+  // that a training frame saw, out of that frame's sight). 0: only at the
+  // steps.
   int carve_every = 100;
   std::uint64_t seed = 0;
 

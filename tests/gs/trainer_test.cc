@@ -319,6 +319,33 @@ TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {
               1e-6);
 }
 
+TEST(TrainerTest, ExtraViewOutsideWeightAddsThePixelsOutsideTheMask) {
+  // The same first step (the loss is taken before any update) with the
+  // pixels outside the mask weighted 0, 1 and 3: the loss is linear in the
+  // weight, 0 is the masked loss, and the outside pixels count.
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {0.0f}, {0});
+  ExtraView extra;
+  extra.camera = CameraAt(0.2f);
+  extra.target.assign(kWidth * kHeight * 3, 1.0f);  // white
+  extra.mask.assign(kWidth * kHeight, 0);
+  for (int p = 0; p < kWidth * kHeight / 2; ++p) extra.mask[p] = 1;
+  const auto first_step = [&](double outside) {
+    ExtraView e = extra;
+    e.outside_weight = outside;
+    Trainer trainer(teacher, views, FastOptions(5));
+    trainer.extra_view = [&](std::int64_t) { return &e; };
+    return trainer.Step().extra;
+  };
+  const double masked = first_step(0.0), one = first_step(1.0),
+               three = first_step(3.0);
+  EXPECT_GT(one, masked * 1.05);
+  EXPECT_NEAR(three - masked, 3.0 * (one - masked), 1e-9);
+  // An empty mask adds nothing, whatever the outside weight.
+  extra.mask.assign(kWidth * kHeight, 0);
+  EXPECT_EQ(first_step(1.0), 0.0);
+}
+
 TEST(TrainerTest, NormalFlatnessTermFlattensGaussiansAlongTheDepthNormals) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.0f, 0.1f}, {0, 0, 0});

@@ -135,6 +135,7 @@ TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   EXPECT_EQ(a->mask.size(), static_cast<std::size_t>(kWidth * kHeight));
   EXPECT_EQ(target.size(), a->mask.size() * 3);
   EXPECT_DOUBLE_EQ(a->weight, 0.1);
+  EXPECT_DOUBLE_EQ(a->outside_weight, ExpansionOptions().refine_outside_weight);
   expansion.ViewFor(8);
   EXPECT_EQ(expansion.ViewFor(7)->target, target);
   // A step trains on it: the hook is used and the loss counts it.
@@ -347,6 +348,9 @@ TEST(ExpansionTest, OptionsAreChecked) {
   EXPECT_THROW(o.Check(), Error);
   o = ExpansionOptions();
   o.refine_weight = -1;
+  EXPECT_THROW(o.Check(), Error);
+  o = ExpansionOptions();
+  o.refine_outside_weight = -0.5;
   EXPECT_THROW(o.Check(), Error);
   GeometryPrior prior;
   EXPECT_THROW(Expansion(ExpansionOptions(), "/tmp/unused", nullptr), Error);
