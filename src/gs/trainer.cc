@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -34,6 +35,35 @@ double Since(Clock::time_point start) {
 }
 
 float Sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
+
+// The expansion's loss on `extra` (ExtraView, trainer.h) for the render
+// `rgb`, with its gradient in *d_rgb (zero where unsupervised); nothing when
+// the mask is empty or the sizes disagree.
+std::optional<double> RefinementLoss(const std::vector<float>& rgb,
+                                     const ExtraView& extra,
+                                     std::vector<float>* d_rgb) {
+  const std::size_t pixels = extra.mask.size();
+  const auto count = static_cast<std::size_t>(
+      std::count_if(extra.mask.begin(), extra.mask.end(),
+                    [](std::uint8_t m) { return m != 0; }));
+  d_rgb->assign(rgb.size(), 0.0f);
+  if (count == 0 || rgb.size() != pixels * 3 ||
+      extra.target.size() != pixels * 3)
+    return std::nullopt;
+  const double norm = 1.0 / (3.0 * count);
+  double sum = 0;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const double w = extra.mask[p] ? 1.0 : extra.outside_weight;
+    if (w == 0.0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const double e = double(rgb[p * 3 + c]) - extra.target[p * 3 + c];
+      sum += w * e * e;
+      (*d_rgb)[p * 3 + c] =
+          static_cast<float>(2.0 * w * extra.weight * norm * e);
+    }
+  }
+  return extra.weight * sum * norm;
+}
 
 }  // namespace
 
@@ -480,26 +510,9 @@ StepReport Trainer::Step() {
       RenderOutput extra_out;
       scene_.ComposeAt(extra->time, &composed_);
       rasterizer_.Forward(composed_, extra->camera, settings, &extra_out);
-      const std::size_t pixels = extra->mask.size();
-      std::size_t count = 0;
-      for (std::uint8_t m : extra->mask) count += m != 0;
-      d_rgb_extra_.assign(extra_out.rgb.size(), 0.0f);
-      double sum = 0;
-      if (count > 0 && extra_out.rgb.size() == pixels * 3 &&
-          extra->target.size() == pixels * 3) {
-        const double norm = 1.0 / (3.0 * count);
-        for (std::size_t p = 0; p < pixels; ++p) {
-          const double w = extra->mask[p] ? 1.0 : extra->outside_weight;
-          if (w == 0.0) continue;
-          for (int c = 0; c < 3; ++c) {
-            const double e =
-                double(extra_out.rgb[p * 3 + c]) - extra->target[p * 3 + c];
-            sum += w * e * e;
-            d_rgb_extra_[p * 3 + c] =
-                static_cast<float>(2.0 * w * extra->weight * norm * e);
-          }
-        }
-        report.extra = extra->weight * sum * norm;
+      if (const std::optional<double> loss =
+              RefinementLoss(extra_out.rgb, *extra, &d_rgb_extra_)) {
+        report.extra = *loss;
         report.loss += report.extra;
         Backprop(extra->camera, extra->time, extra_out, d_rgb_extra_, {});
       }
