@@ -150,6 +150,30 @@ cv::Mat RenderedDepth(Trainer* trainer, const RasterCamera& camera, int time,
   return depth;
 }
 
+// A training view's moving pixels (its dynamic mask) as CV_8UC1, 255 =
+// moving.
+cv::Mat MovingMask(const TrainingView& view) {
+  cv::Mat mask(view.camera.height, view.camera.width, CV_8UC1);
+  for (std::size_t p = 0; p < view.dynamic.size(); ++p)
+    mask.at<std::uint8_t>(static_cast<int>(p)) = view.dynamic[p] ? 255 : 0;
+  return mask;
+}
+
+// The source's moving pixels (CV_8UC1, 255 = moving) forward-warped into
+// `target` like the frame itself (same depth, same z-buffer): 255 where a
+// landed pixel is mostly moving, 0 elsewhere and in holes.
+cv::Mat WarpMoving(const cv::Mat& moving, const cv::Mat& depth,
+                   const RasterCamera& source, const RasterCamera& target) {
+  cv::Mat share;
+  moving.convertTo(share, CV_32F, 1.0 / 255);
+  cv::Mat share3;
+  cv::merge(std::vector<cv::Mat>{share, share, share}, share3);
+  const WarpResult w = ForwardWarp(share3, depth, source, target);
+  cv::Mat landed;
+  cv::extractChannel(w.rgb, landed, 0);
+  return (landed > 0.5f) & (w.mask == 0);
+}
+
 }  // namespace
 
 void ExpansionOptions::Check() const {
@@ -359,6 +383,14 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
                      const_cast<float*>(v.rgb.data()));
     depth[s] = RenderedDepth(trainer, v.camera, v.time, &out);
   }
+  // The sources' moving pixels, for the prior (all or none: a clip's
+  // moving masks are one per frame).
+  std::vector<cv::Mat> moving(ns);
+  const bool all_masked = std::all_of(
+      sources_.begin(), sources_.end(),
+      [&](const Source& s) { return !views[s.view].dynamic.empty(); });
+  for (std::size_t s = 0; all_masked && s < ns; ++s)
+    moving[s] = MovingMask(views[sources_[s].view]);
 
   const bool chain = last_step_ == e - 1 && !previous_.empty();
   const std::filesystem::path dir = StepDir(e);
@@ -376,6 +408,10 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       const ExpandedView& v = cams[m * ns + s];
       WarpResult w =
           ForwardWarp(rgb[s], depth[s], sources_[s].camera, v.camera);
+      if (!moving[s].empty()) {
+        clip.moving.push_back(
+            WarpMoving(moving[s], depth[s], sources_[s].camera, v.camera));
+      }
       original_masks[s] = w.mask.clone();
       const int hole = cv::countNonZero(w.mask);
       hole_sum += static_cast<double>(hole) / w.mask.total();
@@ -609,8 +645,10 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
         views, times[k], [](const TrainingView& t) { return t.time; })];
     const cv::Mat rgb(v.camera.height, v.camera.width, CV_32FC3,
                       const_cast<float*>(v.rgb.data()));
-    WarpResult w = ForwardWarp(
-        rgb, RenderedDepth(trainer, v.camera, v.time, &out), v.camera, target);
+    const cv::Mat depth = RenderedDepth(trainer, v.camera, v.time, &out);
+    WarpResult w = ForwardWarp(rgb, depth, v.camera, target);
+    if (!v.dynamic.empty())
+      clip.moving.push_back(WarpMoving(MovingMask(v), depth, v.camera, target));
     const std::size_t s =
         nearest(sources_, times[k], [](const Source& x) { return x.time; });
     if (s != loaded_source) {
@@ -637,6 +675,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
     clip.references.push_back(rgb.clone());
     clip.reference_cameras.push_back(v.camera);
   }
+  if (clip.moving.size() != clip.frames.size()) clip.moving.clear();
   const PriorResult filled = prior_->Fill(clip);
   if (note) *note = filled.note;
   std::vector<cv::Mat> result(cameras.size());

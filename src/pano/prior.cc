@@ -108,7 +108,8 @@ void FillFromOtherFrames(const PriorClip& clip,
     WarpResult& into = (*states)[i];
     if (!HasHoles(into)) continue;
     for (std::size_t j : NearestInTime(clip.times, i, kNeighbourFrames)) {
-      const cv::Mat valid = (clip.masks[j] == 0) & (clip.depth[j] > 0);
+      cv::Mat valid = (clip.masks[j] == 0) & (clip.depth[j] > 0);
+      if (!clip.moving.empty()) valid &= clip.moving[j] == 0;
       if (!cv::countNonZero(valid)) continue;
       FillHoles(ForwardWarp(clip.frames[j], clip.depth[j], clip.cameras[j],
                             clip.cameras[i], valid),
@@ -123,15 +124,23 @@ cv::Mat InpaintFloat(const cv::Mat& image, const cv::Mat& mask,
   return InpaintTelea(image, mask, max_value, kInpaintRadius);
 }
 
-// Steps 2 and 3: inpaints the state's holes, colour from its known pixels
-// and depth from its known depth (0 stays where no depth is known at all).
-// Returns false, leaving the frame alone, when nothing in it is known.
-bool InpaintHoles(WarpResult* state) {
+// The clip's moving pixels of frame i; empty when the clip has none.
+cv::Mat MovingAt(const PriorClip& clip, std::size_t i) {
+  return clip.moving.empty() ? cv::Mat() : clip.moving[i];
+}
+
+// Steps 2 and 3: inpaints the state's holes, colour from its known static
+// pixels (`moving`, when not empty, marks the others) and depth from their
+// depth (0 stays where no depth is known at all). Returns false, leaving the
+// frame alone, when nothing static in it is known.
+bool InpaintHoles(WarpResult* state, const cv::Mat& moving) {
   const cv::Mat& hole = state->mask;
-  if (cv::countNonZero(hole) == static_cast<int>(hole.total())) return false;
-  const cv::Mat rgb = InpaintFloat(state->rgb, hole, 1.0);
+  const cv::Mat unknown = moving.empty() ? hole : (hole | moving);
+  if (cv::countNonZero(unknown) == static_cast<int>(unknown.total()))
+    return false;
+  const cv::Mat rgb = InpaintFloat(state->rgb, unknown, 1.0);
   rgb.copyTo(state->rgb, hole);
-  const cv::Mat no_depth = hole | (state->depth <= 0);
+  const cv::Mat no_depth = unknown | (state->depth <= 0);
   if (cv::countNonZero(no_depth) < static_cast<int>(no_depth.total())) {
     const cv::Mat depth = FillDepthFromFarthest(state->depth, no_depth);
     depth.copyTo(state->depth, hole);
@@ -148,7 +157,7 @@ void PropagateReference(const PriorClip& clip,
   WarpResult& reference = (*states)[r];
   if (!HasHoles(reference)) return;
   const cv::Mat invented = reference.mask.clone();
-  if (!InpaintHoles(&reference)) return;
+  if (!InpaintHoles(&reference, MovingAt(clip, r))) return;
   for (std::size_t i = 0; i < states->size(); ++i) {
     if (i == r || !HasHoles((*states)[i])) continue;
     FillHoles(ForwardWarp(reference.rgb, reference.depth, clip.cameras[r],
@@ -331,6 +340,10 @@ void PriorClip::Check() const {
   CheckPerFrame(name, "depth", depth, CV_32FC1, "CV_32FC1", cameras);
   CheckPerFrame(name, "references", references, CV_32FC3, "CV_32FC3",
                 reference_cameras);
+  if (!moving.empty()) {
+    check_count("moving", moving.size());
+    CheckPerFrame(name, "moving", moving, CV_8UC1, "CV_8UC1", cameras);
+  }
 }
 
 PriorResult GeometryPrior::Fill(const PriorClip& clip) {
@@ -344,8 +357,9 @@ PriorResult GeometryPrior::Fill(const PriorClip& clip) {
   FillFromOtherFrames(clip, &states);
   PropagateReference(clip, &states);
   int unknown = 0;
-  for (WarpResult& state : states) {
-    if (HasHoles(state) && !InpaintHoles(&state)) {
+  for (std::size_t i = 0; i < count; ++i) {
+    WarpResult& state = states[i];
+    if (HasHoles(state) && !InpaintHoles(&state, MovingAt(clip, i))) {
       state.rgb.setTo(cv::Scalar::all(kUnknownGrey));
       ++unknown;
     }

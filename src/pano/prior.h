@@ -23,6 +23,11 @@ struct PriorClip {
   // The source video at the same times (what a video model conditions on).
   std::vector<cv::Mat> references;  // CV_32FC3 RGB in [0, 1]
   std::vector<RasterCamera> reference_cameras;
+  // Optional (empty, or one per frame): CV_8UC1, 255 where a known pixel
+  // shows a moving object at that frame's time. What moves is somewhere
+  // else at the clip's other times, so the geometry prior neither copies it
+  // across time nor inpaints from it.
+  std::vector<cv::Mat> moving;
 
   // Throws pano4d::Error naming the field when counts, sizes or types
   // disagree (every per-frame vector has frames.size() entries, all of the
@@ -52,13 +57,14 @@ class Prior {
 // The CPU default, with no model weights: geometry first, then classical
 // inpainting, consistent over time.
 //  1. Content seen at other times: each frame's holes are filled from the
-//     known pixels of the clip's other frames (nearest in time first),
-//     forward-warped with their depth into its camera.
+//     known static pixels (not `moving`) of the clip's other frames
+//     (nearest in time first), forward-warped with their depth into its
+//     camera.
 //  2. What nothing saw: a reference frame (the middle one) is inpainted
-//     (cv::inpaint, Telea), colour and depth, and its filled pixels are
-//     warped into the other frames, so that the same invented content
-//     appears at every time.
-//  3. What is still empty is inpainted per frame.
+//     (cv::inpaint, Telea), colour and depth, from its static pixels, and
+//     its filled pixels are warped into the other frames, so that the same
+//     invented content appears at every time.
+//  3. What is still empty is inpainted per frame, from its static pixels.
 class GeometryPrior : public Prior {
  public:
   std::string name() const override { return "geometry"; }

@@ -29,7 +29,10 @@ RasterCamera CameraAt(float x) {
 // A static scene seen by four cameras along x at times 0..3, and a trainer
 // holding a copy of it (as if fitted). The Gaussians fill depths 2 to 4, or
 // with `surface` lie within 1% of depth 3, as a fit leaves them on a surface.
-std::unique_ptr<Trainer> MakeTrainer(bool surface = false) {
+// With `moving`, the views' dynamic masks mark a rectangle (kMovingRect).
+const cv::Rect kMovingRect(18, 12, 12, 10);
+std::unique_ptr<Trainer> MakeTrainer(bool surface = false,
+                                     bool moving = false) {
   GaussianScene scene;
   scene.statics = RandomViewFillingScene(800, CameraAt(0), 3.0f, 5);
   if (surface) {
@@ -52,6 +55,12 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false) {
     rasterizer.Forward(scene.statics, v.camera, {}, &out);
     v.rgb = out.rgb;
     v.depth = out.depth;
+    if (moving) {
+      v.dynamic.assign(kWidth * kHeight, 0);
+      for (int y = kMovingRect.y; y < kMovingRect.br().y; ++y)
+        for (int x = kMovingRect.x; x < kMovingRect.br().x; ++x)
+          v.dynamic[y * kWidth + x] = 1;
+    }
     views.push_back(std::move(v));
   }
   TrainerOptions o;
@@ -273,6 +282,45 @@ class ConstantPrior : public Prior {
 double MeanAbsDifference(const cv::Mat& a, const cv::Mat& b) {
   const cv::Scalar d = cv::mean(cv::abs(a - b));
   return (d[0] + d[1] + d[2]) / 3;
+}
+
+// Keeps every clip it is asked to fill.
+class RecordingPrior : public ConstantPrior {
+ public:
+  std::vector<PriorClip> clips;
+  PriorResult Fill(const PriorClip& clip) override {
+    clips.push_back(clip);
+    return ConstantPrior::Fill(clip);
+  }
+};
+
+// The prior learns which warped pixels show moving content (the sources'
+// dynamic masks warped like the frames), so that it can keep them to their
+// own time.
+TEST(ExpansionTest, StepTellsThePriorWhichPixelsMove) {
+  for (bool moving : {false, true}) {
+    SCOPED_TRACE(moving ? "dynamic masks" : "no dynamic masks");
+    testing::TempDir dir;
+    auto trainer = MakeTrainer(/*surface=*/true, moving);
+    RecordingPrior prior;
+    Expansion expansion(SmallOptions(), dir.path(), &prior);
+    expansion.RunStep(trainer.get(), 1);
+    ASSERT_EQ(prior.clips.size(), 2u);  // one per direction
+    for (const PriorClip& clip : prior.clips) {
+      if (!moving) {
+        EXPECT_TRUE(clip.moving.empty());
+        continue;
+      }
+      ASSERT_EQ(clip.moving.size(), clip.frames.size());
+      for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+        const int count = cv::countNonZero(clip.moving[i]);
+        // Landed pixels only, about the rectangle's area (12 degrees away).
+        EXPECT_EQ(cv::countNonZero(clip.moving[i] & clip.masks[i]), 0);
+        EXPECT_GT(count, kMovingRect.area() / 2) << i;
+        EXPECT_LT(count, kMovingRect.area() * 3 / 2) << i;
+      }
+    }
+  }
 }
 
 TEST(ExpansionTest, PanoramaResultsComeFromTheFramesAndTheRefinedViews) {

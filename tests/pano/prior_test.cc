@@ -208,6 +208,92 @@ TEST(GeometryPriorTest, InventsUnseenContentOnceForEveryFrame) {
   }
 }
 
+// A moving object (white, in front of the plane) painted into frame `i` of
+// a clip over `region`, marked in the clip's moving masks.
+void PaintMovingObject(PriorClip* clip, std::size_t i, const cv::Rect& region) {
+  if (clip->moving.empty()) {
+    for (const cv::Mat& m : clip->masks)
+      clip->moving.push_back(cv::Mat::zeros(m.size(), CV_8UC1));
+  }
+  clip->frames[i](region).setTo(cv::Scalar::all(1));
+  clip->depth[i](region).setTo(kPlaneZ * 0.9);
+  clip->masks[i](region).setTo(0);
+  clip->moving[i](region).setTo(255);
+}
+
+// Mean over `region` of the distance between frame `i`'s colour and white.
+double MeanDistanceToWhite(const PriorResult& result, std::size_t i,
+                           const cv::Rect& region) {
+  double sum = 0;
+  for (int y = region.y; y < region.br().y; ++y)
+    for (int x = region.x; x < region.br().x; ++x)
+      sum +=
+          cv::norm(result.frames[i].at<cv::Vec3f>(y, x) - cv::Vec3f(1, 1, 1));
+  return sum / region.area();
+}
+
+TEST(GeometryPriorTest, DoesNotCopyMovingContentAcrossTime) {
+  // One camera, three times. At time 0 a moving object covers `region`; at
+  // time 1 the region is a hole; at time 2 it shows the plane. The object
+  // is elsewhere at time 1, so the hole must come from time 2.
+  const cv::Rect region(10, 8, 6, 6);
+  PriorClip clip = PlaneClip({0, 0, 0}, [](int, auto&) { return false; });
+  clip.masks[1](region).setTo(255);
+  clip.frames[1](region).setTo(cv::Scalar::all(NAN));
+  PaintMovingObject(&clip, 0, region);
+
+  const PriorResult result = GeometryPrior().Fill(clip);
+  // Time 0's static pixels around the region may bridge its corners as warp
+  // cracks (interpolated); the rest is time 2's plane, exactly.
+  double sum_error = 0;
+  int exact = 0;
+  for (int y = region.y; y < region.br().y; ++y) {
+    for (int x = region.x; x < region.br().x; ++x) {
+      const cv::Vec3f truth = PlaneColour(WorldPoint(0, x, y));
+      const double error =
+          cv::norm(result.frames[1].at<cv::Vec3f>(y, x) - truth, cv::NORM_INF);
+      sum_error += error;
+      exact += error < 1e-4;
+    }
+  }
+  EXPECT_LT(sum_error / region.area(), 0.1);
+  EXPECT_GT(exact, region.area() / 2);
+  EXPECT_GT(MeanDistanceToWhite(result, 1, region), 0.5);
+
+  // Without the moving masks the object (time 0, nearest first) is copied.
+  PriorClip unmarked = clip;
+  unmarked.moving.clear();
+  EXPECT_LT(MeanDistanceToWhite(GeometryPrior().Fill(unmarked), 1, region),
+            1e-4);
+}
+
+TEST(GeometryPriorTest, InpaintsFromStaticPixelsOnly) {
+  // A hole that no frame saw, beside a moving object in every frame: the
+  // invented content continues the plane, not the object.
+  const cv::Rect hole_region(10, 8, 6, 8), object(16, 6, 8, 12);
+  PriorClip clip = PlaneClip({0, 0, 0}, [](int, auto&) { return false; });
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    clip.masks[i](hole_region).setTo(255);
+    clip.frames[i](hole_region).setTo(cv::Scalar::all(NAN));
+    PaintMovingObject(&clip, i, object);
+  }
+  PriorClip unmarked = clip;
+  unmarked.moving.clear();
+  const PriorResult result = GeometryPrior().Fill(clip);
+  const PriorResult control = GeometryPrior().Fill(unmarked);
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    const double marked = MeanDistanceToWhite(result, i, hole_region);
+    const double bled = MeanDistanceToWhite(control, i, hole_region);
+    EXPECT_GT(marked, bled + 0.1);
+    // The hole's depth comes from the plane, not from the nearer object.
+    for (int y = hole_region.y; y < hole_region.br().y; ++y)
+      for (int x = hole_region.x; x < hole_region.br().x; ++x)
+        EXPECT_NEAR(result.depth[i].at<float>(y, x), kPlaneZ, 1e-3);
+    ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
+  }
+}
+
 TEST(GeometryPriorTest, AClipMaskedEverywhereComesBackFinite) {
   const PriorClip clip =
       PlaneClip({0, 0.1f, 0.2f}, [](int, auto&) { return true; });
@@ -255,6 +341,14 @@ TEST(PriorClipTest, CheckNamesTheFieldThatDisagrees) {
   no_times.times.clear();
   EXPECT_THROW(no_times.Check(), Error);
   EXPECT_THROW(PriorClip().Check(), Error);
+  PriorClip short_moving = clip;
+  short_moving.moving.push_back(cv::Mat::zeros(kHeight, kWidth, CV_8UC1));
+  try {
+    short_moving.Check();
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "moving");
+  }
 }
 
 TEST(CompositeTest, SelectsPerPixelAndRejectsMismatches) {
