@@ -360,7 +360,7 @@ PriorResult GeometryPrior::Fill(const PriorClip& clip) {
   for (std::size_t i = 0; i < count; ++i) {
     WarpResult& state = states[i];
     if (HasHoles(state) && !InpaintHoles(&state, MovingAt(clip, i))) {
-      state.rgb.setTo(cv::Scalar::all(kUnknownGrey));
+      state.rgb.setTo(cv::Scalar::all(kUnknownGrey), state.mask);
       ++unknown;
     }
     Sanitise(&state);
@@ -368,8 +368,9 @@ PriorResult GeometryPrior::Fill(const PriorClip& clip) {
   if (unknown > 0) {
     PANO4D_LOG(kWarning) << "geometry prior: clip " << clip.name << ": "
                          << unknown << " of " << count
-                         << " frames have no known pixel to fill from (the "
-                            "clip is masked everywhere); filled mid-grey";
+                         << " frames have no known static pixel to fill "
+                            "from (the clip is masked everywhere, or shows "
+                            "only moving content); filled mid-grey";
   }
   PriorResult result;
   result.prior = name();

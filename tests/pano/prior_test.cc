@@ -294,6 +294,32 @@ TEST(GeometryPriorTest, InpaintsFromStaticPixelsOnly) {
   }
 }
 
+TEST(GeometryPriorTest, AFrameOfOnlyMovingContentKeepsItAndFillsGrey) {
+  // Every frame: the left half a hole, the right half a moving object, so
+  // nothing static is known anywhere.
+  const cv::Rect left(0, 0, kWidth / 2, kHeight),
+      right(kWidth / 2, 0, kWidth / 2, kHeight);
+  PriorClip clip = PlaneClip({0, 0.1f}, [](int, auto&) { return false; });
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    clip.masks[i](left).setTo(255);
+    clip.frames[i](left).setTo(cv::Scalar::all(NAN));
+    PaintMovingObject(&clip, i, right);
+  }
+  std::ostringstream log;
+  SetLogSink(&log);
+  const PriorResult result = GeometryPrior().Fill(clip);
+  SetLogSink(nullptr);
+  EXPECT_NE(log.str().find("only moving content"), std::string::npos)
+      << log.str();
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
+    EXPECT_EQ(cv::norm(result.frames[i](left),
+                       cv::Mat(left.size(), CV_32FC3, cv::Scalar::all(0.5)),
+                       cv::NORM_INF),
+              0);
+  }
+}
+
 TEST(GeometryPriorTest, AClipMaskedEverywhereComesBackFinite) {
   const PriorClip clip =
       PlaneClip({0, 0.1f, 0.2f}, [](int, auto&) { return true; });
