@@ -153,10 +153,9 @@ cv::Mat RenderedDepth(Trainer* trainer, const RasterCamera& camera, int time,
 // A training view's moving pixels (its dynamic mask) as CV_8UC1, 255 =
 // moving.
 cv::Mat MovingMask(const TrainingView& view) {
-  cv::Mat mask(view.camera.height, view.camera.width, CV_8UC1);
-  for (std::size_t p = 0; p < view.dynamic.size(); ++p)
-    mask.at<std::uint8_t>(static_cast<int>(p)) = view.dynamic[p] ? 255 : 0;
-  return mask;
+  const cv::Mat dynamic(view.camera.height, view.camera.width, CV_8UC1,
+                        const_cast<std::uint8_t*>(view.dynamic.data()));
+  return dynamic != 0;
 }
 
 // The source's moving pixels (CV_8UC1, 255 = moving) forward-warped into

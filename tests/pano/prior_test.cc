@@ -208,6 +208,23 @@ TEST(GeometryPriorTest, InventsUnseenContentOnceForEveryFrame) {
   }
 }
 
+// Frame `i` of a clip masked over `region` (NaN under the mask, as holes
+// hold arbitrary values).
+void MaskRegion(PriorClip* clip, std::size_t i, const cv::Rect& region) {
+  clip->masks[i](region).setTo(255);
+  clip->frames[i](region).setTo(cv::Scalar::all(NAN));
+}
+
+// The geometry prior's fill of `clip`, with what it logged in *log.
+PriorResult FillLogged(const PriorClip& clip, std::string* log) {
+  std::ostringstream stream;
+  SetLogSink(&stream);
+  PriorResult result = GeometryPrior().Fill(clip);
+  SetLogSink(nullptr);
+  *log = stream.str();
+  return result;
+}
+
 // A moving object (white, in front of the plane) painted into frame `i` of
 // a clip over `region`, marked in the clip's moving masks.
 void PaintMovingObject(PriorClip* clip, std::size_t i, const cv::Rect& region) {
@@ -238,8 +255,7 @@ TEST(GeometryPriorTest, DoesNotCopyMovingContentAcrossTime) {
   // is elsewhere at time 1, so the hole must come from time 2.
   const cv::Rect region(10, 8, 6, 6);
   PriorClip clip = PlaneClip({0, 0, 0}, [](int, auto&) { return false; });
-  clip.masks[1](region).setTo(255);
-  clip.frames[1](region).setTo(cv::Scalar::all(NAN));
+  MaskRegion(&clip, 1, region);
   PaintMovingObject(&clip, 0, region);
 
   const PriorResult result = GeometryPrior().Fill(clip);
@@ -273,8 +289,7 @@ TEST(GeometryPriorTest, InpaintsFromStaticPixelsOnly) {
   const cv::Rect hole_region(10, 8, 6, 8), object(16, 6, 8, 12);
   PriorClip clip = PlaneClip({0, 0, 0}, [](int, auto&) { return false; });
   for (std::size_t i = 0; i < clip.frames.size(); ++i) {
-    clip.masks[i](hole_region).setTo(255);
-    clip.frames[i](hole_region).setTo(cv::Scalar::all(NAN));
+    MaskRegion(&clip, i, hole_region);
     PaintMovingObject(&clip, i, object);
   }
   PriorClip unmarked = clip;
@@ -301,16 +316,12 @@ TEST(GeometryPriorTest, AFrameOfOnlyMovingContentKeepsItAndFillsGrey) {
       right(kWidth / 2, 0, kWidth / 2, kHeight);
   PriorClip clip = PlaneClip({0, 0.1f}, [](int, auto&) { return false; });
   for (std::size_t i = 0; i < clip.frames.size(); ++i) {
-    clip.masks[i](left).setTo(255);
-    clip.frames[i](left).setTo(cv::Scalar::all(NAN));
+    MaskRegion(&clip, i, left);
     PaintMovingObject(&clip, i, right);
   }
-  std::ostringstream log;
-  SetLogSink(&log);
-  const PriorResult result = GeometryPrior().Fill(clip);
-  SetLogSink(nullptr);
-  EXPECT_NE(log.str().find("only moving content"), std::string::npos)
-      << log.str();
+  std::string log;
+  const PriorResult result = FillLogged(clip, &log);
+  EXPECT_NE(log.find("only moving content"), std::string::npos) << log;
   for (std::size_t i = 0; i < clip.frames.size(); ++i) {
     ExpectUnmaskedIdentical(clip.frames[i], result.frames[i], clip.masks[i]);
     EXPECT_EQ(cv::norm(result.frames[i](left),
@@ -323,12 +334,9 @@ TEST(GeometryPriorTest, AFrameOfOnlyMovingContentKeepsItAndFillsGrey) {
 TEST(GeometryPriorTest, AClipMaskedEverywhereComesBackFinite) {
   const PriorClip clip =
       PlaneClip({0, 0.1f, 0.2f}, [](int, auto&) { return true; });
-  std::ostringstream log;
-  SetLogSink(&log);
-  const PriorResult result = GeometryPrior().Fill(clip);
-  SetLogSink(nullptr);
-  EXPECT_NE(log.str().find("masked everywhere"), std::string::npos)
-      << log.str();
+  std::string log;
+  const PriorResult result = FillLogged(clip, &log);
+  EXPECT_NE(log.find("masked everywhere"), std::string::npos) << log;
   for (std::size_t i = 0; i < clip.frames.size(); ++i) {
     EXPECT_TRUE(AllFiniteInUnitRange(result.frames[i]));
     EXPECT_TRUE(cv::checkRange(result.depth[i], true, nullptr, 0, 1e9));
