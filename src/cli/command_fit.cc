@@ -626,6 +626,11 @@ void AddFitCommand(CLI::App& app, Action* action) {
                   "Thickness of moving objects, relative to their depth, "
                   "for the hidden-depth term")
       ->capture_default_str();
+  sub->add_option("--max-static-scale-pixels",
+                  o->trainer.max_static_scale_pixels,
+                  "Largest scale of a static Gaussian, in pixels at the "
+                  "median depth; clamped after every step (0: no clamp)")
+      ->capture_default_str();
   sub->add_option("--smoothness-weight", o->trainer.smoothness_weight,
                   "Weight of the motion bases' acceleration penalty")
       ->capture_default_str();

@@ -8,10 +8,10 @@
 
 namespace pano4d {
 
-// 2D point tracks from dense optical flow (OpenCV DIS) chained frame to
-// frame, forward and backward from a reference frame, with a
-// forward-backward check at every link: a track ends where the flow to the
-// next frame and back misses its start by more than the threshold
+// 2D point tracks from dense optical flow (OpenCV DIS, down to full
+// resolution) chained frame to frame, forward and backward from a reference
+// frame, with a forward-backward check at every link: a track ends where the
+// flow to the next frame and back misses its start by more than the threshold
 // (occlusion, or flow that cannot be trusted). The blueprint's motion
 // initialisation lifts these with depth.
 struct TrackOptions {

@@ -172,6 +172,7 @@ void TrainerOptions::Check() const {
   non_negative(prune_opacity, "prune_opacity");
   positive(max_screen_radius, "max_screen_radius");
   positive(opacity_reset_every, "opacity_reset_every");
+  non_negative(max_static_scale_pixels, "max_static_scale_pixels");
   positive(static_cast<double>(max_gaussians), "max_gaussians");
 }
 
@@ -204,6 +205,7 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"max_screen_radius", max_screen_radius},
           {"opacity_reset_every", opacity_reset_every},
           {"max_gaussians", max_gaussians},
+          {"max_static_scale_pixels", max_static_scale_pixels},
           {"background", {background.x(), background.y(), background.z()}}};
 }
 
@@ -257,6 +259,16 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
   }
   extent_ = std::max(1.1 * radius, depth_scale);
   if (!(extent_ > 0)) extent_ = 1.0;
+  if (options_.max_static_scale_pixels > 0) {
+    std::vector<double> focals;
+    for (const TrainingView& v : views_)
+      focals.push_back(0.5 * (v.camera.fx + v.camera.fy));
+    std::nth_element(focals.begin(), focals.begin() + focals.size() / 2,
+                     focals.end());
+    const double depth = depth_scale > 0 ? depth_scale : extent_;
+    max_static_log_scale_ = static_cast<float>(std::log(
+        options_.max_static_scale_pixels * depth / focals[focals.size() / 2]));
+  }
   RegisterGroups();
   UpdateLearningRates();
   const std::size_t n = scene_.size();
@@ -563,6 +575,8 @@ StepReport Trainer::Step() {
         basis_adam_.Step({&basis_grads_.rotations, &basis_grads_.translations})
             .skipped_rows;
   }
+  for (float& v : scene_.statics.log_scales)
+    v = std::min(v, max_static_log_scale_);
   skipped_rows_total_ += report.skipped_rows;
   times_.optimise += Since(start);
   ++iteration_;

@@ -119,13 +119,14 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   const Coverage c = Measure(scene, views, 3 * report.voxel_size);
   RecordProperty("covered", std::to_string(c.covered));
   RecordProperty("floating", std::to_string(c.floating));
-  // Measured: 0.918 covered, 0.257 floating (identity bases: 0.424 and
-  // 0.599). The floaters are the tracks'
-  // drift far from the canonical time (docs/ARCHITECTURE.md, "Moving
-  // pixels"), which the fit corrects only in part; the bound keeps it from
-  // growing.
+  // Measured: 0.933 covered, 0.203 floating (identity bases: 0.424 and
+  // 0.599). The floaters are the tracks' drift far from the canonical time
+  // (docs/ARCHITECTURE.md, "Moving pixels"), which the fit corrects only in
+  // part. With the flow stopped at half resolution (OpenCV DIS's preset)
+  // the tracks drifted more: 0.918 and 0.257, which the floating bound
+  // fails.
   EXPECT_GT(c.covered, 0.85);
-  EXPECT_LT(c.floating, 0.35);
+  EXPECT_LT(c.floating, 0.23);
   // Against no motion at all (every basis the identity at every time), the
   // fitted bases cover more and float less.
   GaussianScene frozen = scene;

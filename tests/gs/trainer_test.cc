@@ -1,5 +1,6 @@
 #include "src/gs/trainer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -254,6 +255,42 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   GaussianModel wrong_degree = extra;
   wrong_degree.sh_degree = extra.sh_degree + 1;
   EXPECT_THROW(trainer.AddStaticGaussians(wrong_degree), Error);
+}
+
+// A static Gaussian may not grow wider than max_static_scale_pixels at the
+// median depth: after a step every static scale is within it, and without
+// the clamp (0) the wide ones stay wide.
+TEST(TrainerTest, StaticScalesAreClampedToThePixelBound) {
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
+  GaussianScene student = Perturbed(teacher, 6);
+  for (std::size_t i = 0; i < 20 * 3; ++i)
+    student.statics.log_scales[i] = std::log(1.0f);  // far wider than 4 px
+  std::vector<float> medians;
+  for (const TrainingView& v : views) {
+    std::vector<float> d;
+    for (float z : v.depth)
+      if (z > 0) d.push_back(z);
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    medians.push_back(d[d.size() / 2]);
+  }
+  std::nth_element(medians.begin(), medians.begin() + medians.size() / 2,
+                   medians.end());
+  const float bound = 4.0f * medians[medians.size() / 2] /
+                      (0.5f * (views[0].camera.fx + views[0].camera.fy));
+  ASSERT_LT(bound, 0.5f);
+
+  TrainerOptions options = FastOptions(3);
+  options.max_static_scale_pixels = 4.0;
+  Trainer clamped(student, views, options);
+  clamped.Step();
+  for (float v : clamped.scene().statics.log_scales)
+    ASSERT_LE(v, std::log(bound) + 1e-5f);
+
+  options.max_static_scale_pixels = 0.0;
+  Trainer free(student, views, options);
+  free.Step();
+  EXPECT_GT(free.scene().statics.log_scales[0], std::log(0.9f));
 }
 
 // The expansion's free-space carving removes static rows: the dynamic ones,
