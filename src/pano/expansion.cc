@@ -173,6 +173,12 @@ cv::Mat WarpMoving(const cv::Mat& moving, const cv::Mat& depth,
   return (landed > 0.5f) & (w.mask == 0);
 }
 
+// PriorClip::moving is all or none (one mask per frame): a clip some of
+// whose sources have no dynamic mask gives the prior none.
+void KeepMovingIfEveryFrameHasIt(PriorClip* clip) {
+  if (clip->moving.size() != clip->frames.size()) clip->moving.clear();
+}
+
 }  // namespace
 
 void ExpansionOptions::Check() const {
@@ -382,14 +388,13 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
                      const_cast<float*>(v.rgb.data()));
     depth[s] = RenderedDepth(trainer, v.camera, v.time, &out);
   }
-  // The sources' moving pixels, for the prior (all or none: a clip's
-  // moving masks are one per frame).
+  // The sources' moving pixels, for the prior; empty where a view has no
+  // dynamic mask.
   std::vector<cv::Mat> moving(ns);
-  const bool all_masked = std::all_of(
-      sources_.begin(), sources_.end(),
-      [&](const Source& s) { return !views[s.view].dynamic.empty(); });
-  for (std::size_t s = 0; all_masked && s < ns; ++s)
-    moving[s] = MovingMask(views[sources_[s].view]);
+  for (std::size_t s = 0; s < ns; ++s) {
+    const TrainingView& v = views[sources_[s].view];
+    if (!v.dynamic.empty()) moving[s] = MovingMask(v);
+  }
 
   const bool chain = last_step_ == e - 1 && !previous_.empty();
   const std::filesystem::path dir = StepDir(e);
@@ -429,6 +434,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       clip.reference_cameras.push_back(sources_[s].camera);
       cameras_json.push_back(ToJson(v));
     }
+    KeepMovingIfEveryFrameHasIt(&clip);
     const PriorResult filled = prior_->Fill(clip);
     if (filled.prior != prior_->name()) {
       ++report.fallbacks;
@@ -674,7 +680,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
     clip.references.push_back(rgb.clone());
     clip.reference_cameras.push_back(v.camera);
   }
-  if (clip.moving.size() != clip.frames.size()) clip.moving.clear();
+  KeepMovingIfEveryFrameHasIt(&clip);
   const PriorResult filled = prior_->Fill(clip);
   if (note) *note = filled.note;
   std::vector<cv::Mat> result(cameras.size());
