@@ -13,6 +13,7 @@
 
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/core/median.h"
 #include "src/core/timer.h"
 
 namespace pano4d {
@@ -181,12 +182,6 @@ double InlierRatio(const std::vector<double>& residuals, double threshold) {
   return static_cast<double>(n) / residuals.size();
 }
 
-double Median(std::vector<double> values) {
-  auto mid = values.begin() + values.size() / 2;
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
-}
-
 // Chooses and fits the two-view model of i -> j (kind kNone when the grid
 // is too small or LMedS fails): the identity when the camera stands still,
 // else the fundamental matrix, or the homography when it explains the grid
@@ -194,7 +189,7 @@ double Median(std::vector<double> values) {
 PairModel FitModel(PairModel model, const Grid& grid, const WorkingGeometry& g,
                    const DynamicMaskOptions& o) {
   if (static_cast<int>(grid.from.size()) < o.min_correspondences) return model;
-  if (Median(grid.motion) < g.static_motion_px) {
+  if (UpperMedian(grid.motion) < g.static_motion_px) {
     model.kind = PairModel::Kind::kStatic;
     return model;
   }
@@ -238,7 +233,7 @@ void Calibrate(PairModel* m, const Grid& grid, const WorkingGeometry& g,
   const std::vector<double> residuals = GridResiduals(*m, grid);
   // Rousseeuw's robust scale of LMedS residuals.
   const double sigma =
-      1.4826 * (1.0 + 5.0 / (residuals.size() - 7.0)) * Median(residuals);
+      1.4826 * (1.0 + 5.0 / (residuals.size() - 7.0)) * UpperMedian(residuals);
   m->threshold_px = std::max(g.residual_px, o.noise_factor * sigma);
   m->inlier_ratio = InlierRatio(residuals, m->threshold_px);
   if (m->inlier_ratio < o.min_inlier_ratio) m->kind = PairModel::Kind::kNone;

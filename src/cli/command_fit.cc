@@ -25,6 +25,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/median.h"
 #include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/core/run_recorder.h"
@@ -191,9 +192,7 @@ void WarnIfNearThePlane(const std::vector<TrainingView>& views) {
     for (std::size_t i = 0; i < v.depth.size(); i += 97)
       if (v.depth[i] > 0) depths.push_back(v.depth[i]);
   if (depths.empty()) return;
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2,
-                   depths.end());
-  const double median = depths[depths.size() / 2];
+  const double median = UpperMedian(std::move(depths));
   if (median < kNearPlaneMargin * kNearPlane) {
     PANO4D_LOG(kWarning)
         << "fit: the training depth's median is " << median

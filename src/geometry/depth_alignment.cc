@@ -7,6 +7,7 @@
 #include <ceres/ceres.h>
 
 #include "src/core/error.h"
+#include "src/core/median.h"
 
 namespace pano4d {
 namespace {
@@ -100,9 +101,7 @@ DepthAlignment AlignDepth(const cv::Mat& depth,
     errors.push_back(std::abs((scale * ds[i] + shift - zs[i]) / zs[i]));
     if (errors.back() <= options.robust_scale) ++a.inliers;
   }
-  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2,
-                   errors.end());
-  a.median_relative_error = errors[errors.size() / 2];
+  a.median_relative_error = UpperMedian(std::move(errors));
   return a;
 }
 

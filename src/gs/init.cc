@@ -11,6 +11,7 @@
 
 #include "src/core/error.h"
 #include "src/core/log.h"
+#include "src/core/median.h"
 #include "src/geometry/inpaint.h"
 
 namespace pano4d {
@@ -30,12 +31,6 @@ constexpr float kVoteFloor = 1e-3f;
 constexpr double kInlierFactor = 3.0;
 // Pixels around a hole that inpainting draws from.
 constexpr double kInpaintRadius = 5.0;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 Eigen::Vector3f Unproject(const RasterCamera& cam, float u, float v, float z) {
   const Eigen::Vector3f xc((u - cam.cx) / cam.fx * z, (v - cam.cy) / cam.fy * z,
@@ -182,7 +177,8 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                 "no training view has depth; run "
                 "`pano4d depth` first");
   }
-  const double voxel = Median(depths) * o.voxel_pixels / Median(focals);
+  const double voxel =
+      UpperMedian(depths) * o.voxel_pixels / UpperMedian(focals);
   report.voxel_size = voxel;
 
   // The canonical time: the middle of the dynamic content's time range.
@@ -380,7 +376,7 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
           residual[j] = (transform.topLeftCorner<3, 3>() * src.col(j) +
                          transform.topRightCorner<3, 1>() - dst.col(j))
                             .norm();
-        const double limit = kInlierFactor * Median(residual) + 1e-12;
+        const double limit = kInlierFactor * UpperMedian(residual) + 1e-12;
         std::vector<std::size_t> inliers;
         for (std::size_t j = 0; j < members.size(); ++j)
           if (residual[j] <= limit) inliers.push_back(members[j]);

@@ -11,6 +11,7 @@
 #include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/log.h"
+#include "src/core/median.h"
 #include "src/core/npy.h"
 #include "src/gs/loss.h"
 #include "src/gs/surface_loss.h"
@@ -246,28 +247,20 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
     for (float d : views_[i].depth)
       if (d > 0) valid.push_back(d);
     if (valid.empty()) continue;
-    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2,
-                     valid.end());
-    median_depth_[i] = valid[valid.size() / 2];
+    median_depth_[i] = UpperMedian(std::move(valid));
     medians.push_back(median_depth_[i]);
   }
-  double depth_scale = 0;
-  if (!medians.empty()) {
-    std::nth_element(medians.begin(), medians.begin() + medians.size() / 2,
-                     medians.end());
-    depth_scale = medians[medians.size() / 2];
-  }
+  const double depth_scale = UpperMedian(std::move(medians));
   extent_ = std::max(1.1 * radius, depth_scale);
   if (!(extent_ > 0)) extent_ = 1.0;
   if (options_.max_static_scale_pixels > 0) {
     std::vector<double> focals;
     for (const TrainingView& v : views_)
       focals.push_back(0.5 * (v.camera.fx + v.camera.fy));
-    std::nth_element(focals.begin(), focals.begin() + focals.size() / 2,
-                     focals.end());
     const double depth = depth_scale > 0 ? depth_scale : extent_;
-    max_static_log_scale_ = static_cast<float>(std::log(
-        options_.max_static_scale_pixels * depth / focals[focals.size() / 2]));
+    max_static_log_scale_ =
+        static_cast<float>(std::log(options_.max_static_scale_pixels * depth /
+                                    UpperMedian(std::move(focals))));
   }
   RegisterGroups();
   UpdateLearningRates();

@@ -13,6 +13,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/median.h"
 #include "src/core/npy.h"
 #include "src/geometry/inpaint.h"
 #include "src/geometry/point_cloud.h"
@@ -38,12 +39,6 @@ std::string Name(const char* prefix, int value, int width) {
   s.fill('0');
   s << value;
   return s.str();
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // Colour quantised to 8 bits, as the refinement target is stored (so that a
@@ -508,7 +503,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   }
   if (options_.gaussian_refinement && points.size() > 0) {
     const double voxel =
-        Median(point_depths) * options_.voxel_pixels / Median(focals);
+        UpperMedian(point_depths) * options_.voxel_pixels / UpperMedian(focals);
     PointCloudFilterOptions filter;
     filter.voxel_size = voxel;
     InitOptions init;
