@@ -603,6 +603,15 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--num-bases", o->init.num_bases,
                   "Motion bases K for dynamic content")
       ->capture_default_str();
+  sub->add_option("--dynamic-thickness", o->init.dynamic_thickness,
+                  "Moving objects start solid: each moving pixel of the "
+                  "canonical frame also seeds Gaussians behind it, out to "
+                  "this times the depth a round cross-section of its mask's "
+                  "local width has there (0: the visible surface only)")
+      ->capture_default_str();
+  sub->add_option("--dynamic-layers", o->init.dynamic_layers,
+                  "Gaussians seeded behind each such pixel")
+      ->capture_default_str();
   sub->add_option("--max-gaussians", o->trainer.max_gaussians,
                   "Densification stops adding Gaussians at this count")
       ->capture_default_str();

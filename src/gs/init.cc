@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
 #include "src/core/log.h"
@@ -31,6 +32,12 @@ constexpr float kVoteFloor = 1e-3f;
 constexpr double kInlierFactor = 3.0;
 // Pixels around a hole that inpainting draws from.
 constexpr double kInpaintRadius = 5.0;
+// A moving pixel takes its object's local half-width as the largest
+// distance to the mask's edge within this many pixels: wide enough to
+// reach the middle of the small scene's objects (6-12 pixels across at
+// 240 x 180), narrow enough that a far-away object of the same mask does
+// not lend its width.
+constexpr int kHalfWidthWindow = 15;
 
 Eigen::Vector3f Unproject(const RasterCamera& cam, float u, float v, float z) {
   const Eigen::Vector3f xc((u - cam.cx) / cam.fx * z, (v - cam.cy) / cam.fy * z,
@@ -71,6 +78,34 @@ std::vector<float> DepthForMotion(const TrainingView& v) {
           filled.at<float>(static_cast<int>(p / w), static_cast<int>(p % w));
   }
   return out;
+}
+
+// The length, in pixels, of the chord that a round cross-section of the
+// moving mask's local width has behind each of its pixels (0 elsewhere):
+// 2 sqrt(2 R e - e^2) for a pixel e from the mask's edge, R the largest
+// such distance within kHalfWidthWindow (the half-width). For an object
+// whose cross-section is round this is its depth extent behind the
+// visible surface, which one camera never sees.
+cv::Mat ChordPixels(const TrainingView& v) {
+  const int w = v.camera.width, h = v.camera.height;
+  cv::Mat mask(h, w, CV_8UC1);
+  for (int p = 0; p < w * h; ++p) mask.data[p] = v.dynamic[p] ? 255 : 0;
+  cv::Mat edge_distance, half_width;
+  cv::distanceTransform(mask, edge_distance, cv::DIST_L2, cv::DIST_MASK_5);
+  cv::dilate(edge_distance, half_width,
+             cv::getStructuringElement(
+                 cv::MORPH_ELLIPSE,
+                 cv::Size(2 * kHalfWidthWindow + 1, 2 * kHalfWidthWindow + 1)));
+  cv::Mat chord(h, w, CV_32FC1, cv::Scalar(0));
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double e = edge_distance.at<float>(y, x);
+      const double r = half_width.at<float>(y, x);  // >= e: a dilation
+      chord.at<float>(y, x) =
+          static_cast<float>(2.0 * std::sqrt(std::max(0.0, e * (2 * r - e))));
+    }
+  }
+  return chord;
 }
 
 // Keeps every k-th point so that at most `max` remain (deterministic).
@@ -128,6 +163,11 @@ void InitOptions::Check() const {
     throw Error("init options", "num_bases", std::to_string(num_bases),
                 "must be zero or positive");
   }
+  if (!(dynamic_thickness >= 0)) {
+    throw Error("init options", "dynamic_thickness",
+                std::to_string(dynamic_thickness), "must be zero or positive");
+  }
+  positive(dynamic_layers, "dynamic_layers");
   positive(track_stride, "track_stride");
   positive(min_tracks_per_fit, "min_tracks_per_fit");
   if (!(initial_opacity > 0 && initial_opacity < 1)) {
@@ -212,6 +252,10 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
     if (v.depth.empty()) continue;
     const int w = v.camera.width, h = v.camera.height;
     const bool is_canonical = v.time == canonical;
+    const cv::Mat chord = is_canonical && any_dynamic && !v.dynamic.empty() &&
+                                  o.dynamic_thickness > 0
+                              ? ChordPixels(v)
+                              : cv::Mat();
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const std::size_t p = static_cast<std::size_t>(y) * w + x;
@@ -226,6 +270,17 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
         cloud.points.push_back(Unproject(v.camera, x + 0.5f, y + 0.5f, z));
         cloud.colors.emplace_back(v.rgb[p * 3], v.rgb[p * 3 + 1],
                                   v.rgb[p * 3 + 2]);
+        if (!dynamic || chord.empty()) continue;
+        // The object's inside, along the same ray, in the pixel's colour.
+        const float depth_extent = static_cast<float>(
+            o.dynamic_thickness * chord.at<float>(y, x) * z / v.camera.fx);
+        const Eigen::Vector3f colour = cloud.colors.back();
+        for (int k = 1; k <= o.dynamic_layers; ++k) {
+          cloud.points.push_back(Unproject(
+              v.camera, x + 0.5f, y + 0.5f,
+              z + depth_extent * static_cast<float>(k) / o.dynamic_layers));
+          cloud.colors.push_back(colour);
+        }
       }
     }
   }

@@ -32,6 +32,15 @@ struct InitOptions {
   // mPSNR +0.68 dB over seeds 0-2 on the small synthetic scene, whose snake
   // bends (docs/ARCHITECTURE.md).
   int num_bases = 20;
+  // Moving objects are solid, but the canonical frame shows one side of
+  // them: its moving pixels start Gaussians on that surface only, a shell
+  // that a camera 75 degrees aside sees half as wide. Each moving pixel
+  // also seeds `dynamic_layers` Gaussians behind it, evenly out to
+  // dynamic_thickness x the depth that a round cross-section of the mask's
+  // local width has there (ChordPixels in init.cc). 0 leaves the shell.
+  // Measured in docs/ARCHITECTURE.md ("The moving objects' volume").
+  double dynamic_thickness = 1.0;
+  int dynamic_layers = 2;
   int track_stride = 3;  // seeds: every stride-th dynamic pixel
   TrackOptions tracks;
   // Fewer valid tracks than this in a cluster at a time: that time's pose

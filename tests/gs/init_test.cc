@@ -1,11 +1,16 @@
 #include "src/gs/init.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
+#include "evaluation/synth_cameras.h"
+#include "src/render/rasterizer.h"
 #include "tests/support/synth_video.h"
 
 namespace pano4d {
@@ -106,9 +111,14 @@ Coverage Measure(const GaussianScene& scene,
 // view sees through them. The static part has no moving pixels in it.
 TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   const std::vector<TrainingView> views = FilmSyntheticScene();
+  // The visible surface only: this measures the motion. The Gaussians
+  // seeded behind it (dynamic_thickness, below) overshoot objects that are
+  // not round, which some views see as free space (with them: 0.246
+  // floating).
+  InitOptions options;
+  options.dynamic_thickness = 0;
   InitReport report;
-  const GaussianScene scene =
-      InitializeScene(views, kFrames, InitOptions{}, &report);
+  const GaussianScene scene = InitializeScene(views, kFrames, options, &report);
   ASSERT_GT(scene.dynamics.size(), 0u);
   ASSERT_TRUE(scene.has_motion());
   EXPECT_EQ(scene.canonical_time, kFrames / 2);
@@ -139,7 +149,7 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
 
   // Without motion (K = 0) every pixel is static: no dynamic Gaussians,
   // no bases, and more static points.
-  InitOptions still;
+  InitOptions still = options;
   still.num_bases = 0;
   InitReport still_report;
   const GaussianScene static_scene =
@@ -147,6 +157,93 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   EXPECT_EQ(static_scene.dynamics.size(), 0u);
   EXPECT_FALSE(static_scene.has_motion());
   EXPECT_GT(still_report.static_points_raw, report.static_points_raw);
+}
+
+struct Silhouette {
+  double covered = 0;  // share of the true moving pixels the Gaussians cover
+  double spilled = 0;  // share of what they cover outside the true mask
+};
+
+// The initial dynamic Gaussians at the canonical time, made nearly opaque
+// (each covers the pixels within about one sigma of its centre), seen by
+// validation camera `index` of the dense video's scene (75 degrees aside
+// from the training arc), against the moving mask the generator renders
+// for that camera. Spill counts beyond 2 pixels of the true mask.
+Silhouette SideView(const GaussianScene& scene, int index) {
+  const synth::Scene truth =
+      synth::BuildScene(DenseSynthVideo::kSeed, /*is_static=*/false);
+  const double f = 0.9 * kWidth;
+  const Camera intrinsics{CameraModelId::kPinhole,
+                          kWidth,
+                          kHeight,
+                          {f, f, kWidth / 2.0, kHeight / 2.0}};
+  const PosedCamera side = synth::ValidationCamera(truth, intrinsics, index);
+  const synth::RenderedFrame frame =
+      synth::RenderFrame(truth, side, scene.canonical_time / (kFrames - 1.0),
+                         /*shade=*/false, /*keep_surface=*/false);
+
+  GaussianModel composed;
+  scene.ComposeAt(scene.canonical_time, &composed);
+  for (std::size_t i = 0; i < scene.statics.size(); ++i)
+    composed.opacities[i] = InverseSigmoid(1e-6f);  // out of the picture
+  for (std::size_t i = scene.statics.size(); i < composed.size(); ++i)
+    composed.opacities[i] = InverseSigmoid(0.99f);
+  Rasterizer rasterizer;
+  RenderOutput out;
+  rasterizer.Forward(composed, RasterCamera::FromPosed(side), {}, &out);
+
+  cv::Mat near_mask;
+  cv::dilate(frame.dynamic, near_mask,
+             cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+  std::int64_t moving = 0, covered = 0, drawn = 0, spilled = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      const bool in = frame.dynamic.at<std::uint8_t>(y, x) != 0;
+      const bool on =
+          out.alpha[static_cast<std::size_t>(y) * kWidth + x] > 0.5f;
+      moving += in;
+      covered += in && on;
+      drawn += on;
+      spilled += on && near_mask.at<std::uint8_t>(y, x) == 0;
+    }
+  }
+  return {static_cast<double>(covered) / std::max<std::int64_t>(moving, 1),
+          static_cast<double>(spilled) / std::max<std::int64_t>(drawn, 1)};
+}
+
+// The canonical frame shows one side of each moving object. Without a
+// prior its Gaussians form a shell of that side, which a camera 75
+// degrees aside sees narrower than the object; seeded through the depth
+// that the mask's local width suggests (InitOptions::dynamic_thickness),
+// they cover the object's silhouette there, spilling a little more past
+// it (objects that are not round) but not much.
+TEST(InitTest, MovingObjectsStartSolidFromTheSide) {
+  const std::vector<TrainingView> views = FilmSyntheticScene();
+  InitOptions shell;
+  shell.dynamic_thickness = 0;
+  InitReport shell_report, solid_report;
+  const GaussianScene shell_scene =
+      InitializeScene(views, kFrames, shell, &shell_report);
+  const GaussianScene solid_scene =
+      InitializeScene(views, kFrames, InitOptions{}, &solid_report);
+  EXPECT_GT(solid_report.dynamic_points_raw,
+            2 * shell_report.dynamic_points_raw);
+  EXPECT_EQ(solid_report.static_points_raw, shell_report.static_points_raw);
+  for (int index : {1, 2}) {
+    const Silhouette a = SideView(shell_scene, index);
+    const Silhouette b = SideView(solid_scene, index);
+    const std::string camera = std::to_string(index);
+    RecordProperty("covered_shell_" + camera, std::to_string(a.covered));
+    RecordProperty("covered_solid_" + camera, std::to_string(b.covered));
+    RecordProperty("spilled_shell_" + camera, std::to_string(a.spilled));
+    RecordProperty("spilled_solid_" + camera, std::to_string(b.spilled));
+    // Measured: camera 1 covered 0.773 -> 1.000, spilled 0.200 -> 0.296;
+    // camera 2 0.757 -> 1.000, 0.115 -> 0.233. Three times the chord
+    // spills 0.61 and 0.63: the bound catches an object made too deep.
+    EXPECT_GT(b.covered, 0.95) << "camera " << camera;
+    EXPECT_GT(b.covered, a.covered + 0.15) << "camera " << camera;
+    EXPECT_LT(b.spilled, 0.35) << "camera " << camera;
+  }
 }
 
 }  // namespace
