@@ -88,10 +88,11 @@ std::vector<float> DepthForMotion(const TrainingView& v) {
 // visible surface, which one camera never sees.
 cv::Mat ChordPixels(const TrainingView& v) {
   const int w = v.camera.width, h = v.camera.height;
-  cv::Mat mask(h, w, CV_8UC1);
-  for (int p = 0; p < w * h; ++p) mask.data[p] = v.dynamic[p] ? 255 : 0;
+  const cv::Mat dynamic(h, w, CV_8UC1,
+                        const_cast<std::uint8_t*>(v.dynamic.data()));
   cv::Mat edge_distance, half_width;
-  cv::distanceTransform(mask, edge_distance, cv::DIST_L2, cv::DIST_MASK_5);
+  cv::distanceTransform(dynamic != 0, edge_distance, cv::DIST_L2,
+                        cv::DIST_MASK_5);
   cv::dilate(edge_distance, half_width,
              cv::getStructuringElement(
                  cv::MORPH_ELLIPSE,

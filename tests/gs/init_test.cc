@@ -164,12 +164,15 @@ struct Silhouette {
   double spilled = 0;  // share of what they cover outside the true mask
 };
 
-// The initial dynamic Gaussians at the canonical time, made nearly opaque
-// (each covers the pixels within about one sigma of its centre), seen by
-// validation camera `index` of the dense video's scene (75 degrees aside
-// from the training arc), against the moving mask the generator renders
-// for that camera. Spill counts beyond 2 pixels of the true mask.
-Silhouette SideView(const GaussianScene& scene, int index) {
+// Validation camera `index` of the dense video's scene (75 degrees aside
+// from the training arc) and the moving mask the generator renders for it
+// at `time`.
+struct SideCamera {
+  PosedCamera camera;
+  cv::Mat moving;  // CV_8UC1, 255 on moving objects
+};
+
+SideCamera FilmFromTheSide(int index, int time) {
   const synth::Scene truth =
       synth::BuildScene(DenseSynthVideo::kSeed, /*is_static=*/false);
   const double f = 0.9 * kWidth;
@@ -177,11 +180,19 @@ Silhouette SideView(const GaussianScene& scene, int index) {
                           kWidth,
                           kHeight,
                           {f, f, kWidth / 2.0, kHeight / 2.0}};
-  const PosedCamera side = synth::ValidationCamera(truth, intrinsics, index);
-  const synth::RenderedFrame frame =
-      synth::RenderFrame(truth, side, scene.canonical_time / (kFrames - 1.0),
-                         /*shade=*/false, /*keep_surface=*/false);
+  SideCamera side;
+  side.camera = synth::ValidationCamera(truth, intrinsics, index);
+  side.moving = synth::RenderFrame(truth, side.camera, time / (kFrames - 1.0),
+                                   /*shade=*/false, /*keep_surface=*/false)
+                    .dynamic;
+  return side;
+}
 
+// The initial dynamic Gaussians at the canonical time, made nearly opaque
+// (each covers the pixels within about one sigma of its centre), seen by
+// `side` against its true moving mask. Spill counts beyond 2 pixels of
+// the true mask.
+Silhouette SideView(const GaussianScene& scene, const SideCamera& side) {
   GaussianModel composed;
   scene.ComposeAt(scene.canonical_time, &composed);
   for (std::size_t i = 0; i < scene.statics.size(); ++i)
@@ -190,15 +201,15 @@ Silhouette SideView(const GaussianScene& scene, int index) {
     composed.opacities[i] = InverseSigmoid(0.99f);
   Rasterizer rasterizer;
   RenderOutput out;
-  rasterizer.Forward(composed, RasterCamera::FromPosed(side), {}, &out);
+  rasterizer.Forward(composed, RasterCamera::FromPosed(side.camera), {}, &out);
 
   cv::Mat near_mask;
-  cv::dilate(frame.dynamic, near_mask,
+  cv::dilate(side.moving, near_mask,
              cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
   std::int64_t moving = 0, covered = 0, drawn = 0, spilled = 0;
   for (int y = 0; y < kHeight; ++y) {
     for (int x = 0; x < kWidth; ++x) {
-      const bool in = frame.dynamic.at<std::uint8_t>(y, x) != 0;
+      const bool in = side.moving.at<std::uint8_t>(y, x) != 0;
       const bool on =
           out.alpha[static_cast<std::size_t>(y) * kWidth + x] > 0.5f;
       moving += in;
@@ -229,9 +240,11 @@ TEST(InitTest, MovingObjectsStartSolidFromTheSide) {
   EXPECT_GT(solid_report.dynamic_points_raw,
             2 * shell_report.dynamic_points_raw);
   EXPECT_EQ(solid_report.static_points_raw, shell_report.static_points_raw);
+  ASSERT_EQ(shell_scene.canonical_time, solid_scene.canonical_time);
   for (int index : {1, 2}) {
-    const Silhouette a = SideView(shell_scene, index);
-    const Silhouette b = SideView(solid_scene, index);
+    const SideCamera side = FilmFromTheSide(index, solid_scene.canonical_time);
+    const Silhouette a = SideView(shell_scene, side);
+    const Silhouette b = SideView(solid_scene, side);
     const std::string camera = std::to_string(index);
     RecordProperty("covered_shell_" + camera, std::to_string(a.covered));
     RecordProperty("covered_solid_" + camera, std::to_string(b.covered));
