@@ -25,7 +25,8 @@ namespace {
 struct ExpandCommandOptions {
   fs::path workspace;
   ExpansionOptions expansion;
-  int step = 0;  // 0: the one after the last in WS/pano4d/expand
+  std::string warp_depth;  // --warp-depth; empty: ResolveWarpDepth's default
+  int step = 0;            // 0: the one after the last in WS/pano4d/expand
   std::string prior_cmd;
   int panorama_width = 1024;
 };
@@ -53,6 +54,7 @@ int RunExpandCommand(ExpandCommandOptions o) {
   }
   o.expansion.Check();
   const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
+  o.expansion.warp_depth = ResolveWarpDepth(o.warp_depth, frames.depth_source);
   TrainerOptions trainer_options;
   trainer_options.iterations = 1;
   Trainer trainer(ReadCheckpointScene(ckpt), LoadTrainingViews(frames.train),
@@ -104,7 +106,8 @@ void AddExpandCommand(CLI::App& app, Action* action) {
                   "The step e (angle e x alpha); default: the one after the "
                   "last that ran")
       ->check(CLI::PositiveNumber);
-  AddExpansionFlags(sub, &o->expansion, &o->prior_cmd, &o->panorama_width);
+  AddExpansionFlags(sub, &o->expansion, &o->warp_depth, &o->prior_cmd,
+                    &o->panorama_width);
   sub->footer(
       "Writes WS/pano4d/expand/step_<e>/dir_<m>/{warped,mask,refined}/ and "
       "cameras.json, WS/pano4d/expand/trajectories.json and colmap/ (the "

@@ -281,8 +281,11 @@ int RunFitCommand(FitCommandOptions o) {
   std::unique_ptr<Expansion> expansion;
   nlohmann::json expansion_steps = nlohmann::json::array();
   o.expansion.seed = o.seed;
+  o.expansion.warp_depth = ResolveWarpDepth(o.warp_depth, frames.depth_source);
   if (!o.no_expansion) {
     o.expansion.Check();
+    PANO4D_LOG(kInfo) << "fit: expansion warps with "
+                      << WarpDepthName(o.expansion.warp_depth) << " depth";
     if (o.trainer.iterations <= o.expansion.every) {
       PANO4D_LOG(kInfo) << "fit: no expansion: " << o.trainer.iterations
                         << " iterations leave no room for one every "
@@ -670,7 +673,8 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->add_option("--refine-every", o->expansion.refine_every,
                   "L_refine on one expanded view every N iterations")
       ->capture_default_str();
-  AddExpansionFlags(sub, &o->expansion, &o->prior_cmd, &o->panorama_width);
+  AddExpansionFlags(sub, &o->expansion, &o->warp_depth, &o->prior_cmd,
+                    &o->panorama_width);
   sub->add_flag("--one-step-expansion", o->expansion.one_step,
                 "Ablation: no progressive expansion, one step at the full "
                 "angle E x alpha");

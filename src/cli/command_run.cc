@@ -89,10 +89,13 @@ void AdoptColmapWorkspace(const fs::path& ws) {
 // What a fit in the workspace was asked for: a later run with other
 // options fits again from the start instead of resuming or reusing it.
 nlohmann::json FitFingerprint(const FitCommandOptions& f) {
-  return {
-      {"iterations", f.trainer.iterations}, {"seed", f.seed},
-      {"no_motion", f.no_motion},           {"no_expansion", f.no_expansion},
-      {"expansion", f.expansion.ToJson()},  {"prior_cmd", f.prior_cmd}};
+  return {{"iterations", f.trainer.iterations},
+          {"seed", f.seed},
+          {"no_motion", f.no_motion},
+          {"no_expansion", f.no_expansion},
+          {"expansion", f.expansion.ToJson()},
+          {"warp_depth", f.warp_depth},
+          {"prior_cmd", f.prior_cmd}};
 }
 
 // Whether fit.json says a fit of `iterations` finished.

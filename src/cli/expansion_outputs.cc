@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "colmap_ext/model.h"
+#include "src/core/error.h"
+#include "src/core/frames.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/progress.h"
@@ -47,7 +49,8 @@ void AddImage(const RasterCamera& c, const std::string& name,
 }  // namespace
 
 void AddExpansionFlags(CLI::App* sub, ExpansionOptions* o,
-                       std::string* prior_cmd, int* panorama_width) {
+                       std::string* warp_depth, std::string* prior_cmd,
+                       int* panorama_width) {
   sub->add_option("--directions", o->geometry.directions,
                   "Expansion directions M")
       ->capture_default_str();
@@ -62,6 +65,13 @@ void AddExpansionFlags(CLI::App* sub, ExpansionOptions* o,
   sub->add_flag("--planar-expansion", o->geometry.planar,
                 "Ablation: translate cameras in the image plane instead of "
                 "orbiting them on the panorama");
+  sub->add_option("--warp-depth", *warp_depth,
+                  "The depth the source frames are warped with: given (each "
+                  "frame's depth map, rendered depth where it has none) or "
+                  "rendered (from the Gaussians, the paper's); default: "
+                  "given on depth the dataset gives, rendered on estimated "
+                  "depth")
+      ->check(CLI::IsMember({"given", "rendered"}));
   sub->add_option("--prior-cmd", *prior_cmd,
                   "External video prior: a command with {in} and {out} "
                   "(folders; see README). Without it, the CPU geometry prior. "
@@ -71,6 +81,17 @@ void AddExpansionFlags(CLI::App* sub, ExpansionOptions* o,
                   "Width of the panoramas in WS/pano4d/panorama (height half)")
       ->check(CLI::Range(2, 16384))
       ->capture_default_str();
+}
+
+WarpDepth ResolveWarpDepth(const std::string& flag,
+                           const std::string& depth_source) {
+  if (flag == "given") return WarpDepth::kGiven;
+  if (flag == "rendered") return WarpDepth::kRendered;
+  if (!flag.empty()) {
+    throw Error("--warp-depth", "", flag, "expected given or rendered");
+  }
+  return depth_source == kDepthFromDataset ? WarpDepth::kGiven
+                                           : WarpDepth::kRendered;
 }
 
 std::unique_ptr<Prior> MakePrior(const std::string& command,

@@ -26,9 +26,20 @@ namespace pano4d::cli {
 std::string Padded(int value, int width);
 
 // The flags both commands take: --directions, --expansion-steps, --alpha,
-// --expansion-stride, --planar-expansion, --prior-cmd, --panorama-width.
+// --expansion-stride, --planar-expansion, --warp-depth (into `warp_depth`,
+// empty when not given: ResolveWarpDepth), --prior-cmd, --panorama-width.
 void AddExpansionFlags(CLI::App* sub, ExpansionOptions* options,
-                       std::string* prior_cmd, int* panorama_width);
+                       std::string* warp_depth, std::string* prior_cmd,
+                       int* panorama_width);
+
+// --warp-depth as given ("given" or "rendered"), or when empty the default
+// for the frames' depth source (WorkspaceFrames::depth_source): the given
+// depth on depth the dataset gives, measured on the small synthetic scene
+// (docs/ARCHITECTURE.md, "Warping with the given depth"); rendered depth
+// on depth pano4d estimated (stereo has holes and errors at the edges the
+// warp needs most; not measured there).
+WarpDepth ResolveWarpDepth(const std::string& flag,
+                           const std::string& depth_source);
 
 // The prior the expansion fills holes with: the external command when given
 // (its folders under work_dir), falling back to the CPU geometry prior when

@@ -61,6 +61,8 @@ struct FitCommandOptions {
   std::uint64_t seed = 0;
   bool no_expansion = false;
   ExpansionOptions expansion;
+  // --warp-depth; empty: ResolveWarpDepth's default for the frames' depth.
+  std::string warp_depth;
   std::string prior_cmd;  // empty: the CPU geometry prior
   int panorama_width = 1024;
 };

@@ -145,6 +145,19 @@ cv::Mat RenderedDepth(Trainer* trainer, const RasterCamera& camera, int time,
   return depth;
 }
 
+// The depth `view` is warped with (WarpDepth): rendered, and with kGiven
+// the view's own depth wherever it has some (> 0).
+cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
+                    WarpDepth warp_depth, RenderOutput* out) {
+  cv::Mat depth = RenderedDepth(trainer, view.camera, view.time, out);
+  if (warp_depth == WarpDepth::kGiven && !view.depth.empty()) {
+    const cv::Mat given(view.camera.height, view.camera.width, CV_32FC1,
+                        const_cast<float*>(view.depth.data()));
+    given.copyTo(depth, given > 0);
+  }
+  return depth;
+}
+
 // A training view's moving pixels (its dynamic mask) as CV_8UC1, 255 =
 // moving.
 cv::Mat MovingMask(const TrainingView& view) {
@@ -219,7 +232,12 @@ nlohmann::json ExpansionOptions::ToJson() const {
           {"new_gaussian_stride", new_gaussian_stride},
           {"voxel_pixels", voxel_pixels},
           {"carve_every", carve_every},
+          {"warp_depth", WarpDepthName(warp_depth)},
           {"seed", seed}};
+}
+
+const char* WarpDepthName(WarpDepth w) {
+  return w == WarpDepth::kGiven ? "given" : "rendered";
 }
 
 std::vector<int> StepsDueAt(const ExpansionOptions& o, std::int64_t iteration,
@@ -372,8 +390,8 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       options_.geometry, reference_, frame_.center, source_cameras, times, e);
   NameViews(*trainer, &cams);
 
-  // Depth from the current Gaussians at the source cameras, fixed for the
-  // whole step.
+  // The sources' warp depth (options' warp_depth), fixed for the whole
+  // step.
   const std::vector<TrainingView>& views = trainer->views();
   std::vector<cv::Mat> rgb(ns), depth(ns);
   RenderOutput out;
@@ -381,7 +399,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
     const TrainingView& v = views[sources_[s].view];
     rgb[s] = cv::Mat(v.camera.height, v.camera.width, CV_32FC3,
                      const_cast<float*>(v.rgb.data()));
-    depth[s] = RenderedDepth(trainer, v.camera, v.time, &out);
+    depth[s] = SourceDepth(trainer, v, options_.warp_depth, &out);
   }
   // The sources' moving pixels, for the prior; empty where a view has no
   // dynamic mask.
@@ -645,7 +663,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
         views, times[k], [](const TrainingView& t) { return t.time; })];
     const cv::Mat rgb(v.camera.height, v.camera.width, CV_32FC3,
                       const_cast<float*>(v.rgb.data()));
-    const cv::Mat depth = RenderedDepth(trainer, v.camera, v.time, &out);
+    const cv::Mat depth = SourceDepth(trainer, v, options_.warp_depth, &out);
     WarpResult w = ForwardWarp(rgb, depth, v.camera, target);
     if (!v.dynamic.empty())
       clip.moving.push_back(WarpMoving(MovingMask(v), depth, v.camera, target));

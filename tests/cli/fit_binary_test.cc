@@ -290,6 +290,9 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
       nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
   const nlohmann::json& steps = fit.at("expansion").at("steps");
   ASSERT_EQ(steps.size(), 2u);
+  // The synthetic dataset gives depth: the frames are warped with it.
+  EXPECT_EQ(fit["expansion"].at("options").at("warp_depth"), "given");
+  EXPECT_NE(text.find("expansion warps with given depth"), std::string::npos);
   EXPECT_GT(steps[0].at("fallbacks").get<int>(), 0);
   EXPECT_GT(steps[1].at("prefilled_fraction").get<double>(), 0.0);
   const fs::path e = ws / "pano4d/expansion";
@@ -347,7 +350,7 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
                           "' --iterations 60 --expand-every 20 "
                           "--expansion-steps 2 --directions 2 "
                           "--expansion-stride 4 --panorama-width 64 "
-                          "--no-gaussian-refinement",
+                          "--no-gaussian-refinement --warp-depth rendered",
                       panorama / "fit.log"),
             0)
       << Slurp(panorama / "fit.log");
@@ -357,6 +360,12 @@ TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
       nlohmann::json::parse(Slurp(panorama / "pano4d/fit.json"));
   EXPECT_EQ(fit3.at("static_gaussians"), fit2.at("static_gaussians"));
   EXPECT_EQ(fit3.at("expansion").at("steps").size(), 2u);
+  EXPECT_EQ(fit3["expansion"].at("options").at("warp_depth"), "rendered");
+  EXPECT_EQ(RunPano4d("fit --workspace '" + panorama.string() +
+                          "' --warp-depth sensor",
+                      panorama / "bad.log"),
+            64)
+      << Slurp(panorama / "bad.log");
   int differ = 0, renders = 0;
   for (const auto& f : fs::directory_iterator(plain / "pano4d/renders/val")) {
     ++renders;

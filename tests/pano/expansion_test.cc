@@ -1,5 +1,6 @@
 #include "src/pano/expansion.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <set>
@@ -7,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
 #include "src/core/image.h"
@@ -30,9 +32,11 @@ RasterCamera CameraAt(float x) {
 // holding a copy of it (as if fitted). The Gaussians fill depths 2 to 4, or
 // with `surface` lie within 1% of depth 3, as a fit leaves them on a surface.
 // With `moving`, the views' dynamic masks mark a rectangle (kMovingRect).
+// The views' depth maps are the rendered depth times `given_depth_scale`
+// (0: no depth anywhere).
 const cv::Rect kMovingRect(18, 12, 12, 10);
-std::unique_ptr<Trainer> MakeTrainer(bool surface = false,
-                                     bool moving = false) {
+std::unique_ptr<Trainer> MakeTrainer(bool surface = false, bool moving = false,
+                                     float given_depth_scale = 1.0f) {
   GaussianScene scene;
   scene.statics = RandomViewFillingScene(800, CameraAt(0), 3.0f, 5);
   if (surface) {
@@ -55,6 +59,7 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false,
     rasterizer.Forward(scene.statics, v.camera, {}, &out);
     v.rgb = out.rgb;
     v.depth = out.depth;
+    for (float& d : v.depth) d *= given_depth_scale;
     if (moving) {
       v.dynamic.assign(kWidth * kHeight, 0);
       for (int y = kMovingRect.y; y < kMovingRect.br().y; ++y)
@@ -321,6 +326,51 @@ TEST(ExpansionTest, StepTellsThePriorWhichPixelsMove) {
       }
     }
   }
+}
+
+// Median warped depth over the landed pixels of every frame of `clips`.
+double MedianLandedDepth(const std::vector<PriorClip>& clips) {
+  std::vector<float> z;
+  for (const PriorClip& clip : clips)
+    for (std::size_t i = 0; i < clip.frames.size(); ++i)
+      for (int p = 0; p < static_cast<int>(clip.depth[i].total()); ++p)
+        if (!clip.masks[i].at<std::uint8_t>(p))
+          z.push_back(clip.depth[i].at<float>(p));
+  if (z.empty()) return 0.0;
+  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+  return z[z.size() / 2];
+}
+
+// The frames are warped with their own depth maps under WarpDepth::kGiven
+// and with the Gaussians' rendered depth under kRendered; where a frame has
+// no depth, kGiven falls back to the rendered depth.
+TEST(ExpansionTest, WarpDepthChoosesTheFramesOwnDepthOrTheRenderedOne) {
+  const auto run = [](float given_scale, WarpDepth warp_depth) {
+    testing::TempDir dir;
+    auto trainer = MakeTrainer(/*surface=*/true, false, given_scale);
+    RecordingPrior prior;
+    ExpansionOptions o = SmallOptions();
+    o.warp_depth = warp_depth;
+    Expansion expansion(o, dir.path(), &prior);
+    expansion.RunStep(trainer.get(), 1);
+    EXPECT_EQ(prior.clips.size(), 2u);
+    return prior.clips;
+  };
+  // The Gaussians lie at depth 3; the frames' depth maps say 4.5.
+  const double rendered = MedianLandedDepth(run(1.5f, WarpDepth::kRendered));
+  const double given = MedianLandedDepth(run(1.5f, WarpDepth::kGiven));
+  EXPECT_NEAR(rendered, 3.0, 0.3);
+  EXPECT_NEAR(given, 4.5, 0.45);
+  // Frames without depth: the same warps as kRendered, pixel for pixel.
+  const std::vector<PriorClip> a = run(0.0f, WarpDepth::kRendered);
+  const std::vector<PriorClip> b = run(0.0f, WarpDepth::kGiven);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t c = 0; c < a.size(); ++c)
+    for (std::size_t i = 0; i < a[c].depth.size(); ++i)
+      EXPECT_EQ(cv::norm(a[c].depth[i], b[c].depth[i], cv::NORM_INF), 0.0)
+          << c << " " << i;
+  EXPECT_STREQ(WarpDepthName(WarpDepth::kGiven), "given");
+  EXPECT_EQ(SmallOptions().ToJson().at("warp_depth"), "rendered");
 }
 
 TEST(ExpansionTest, PanoramaResultsComeFromTheFramesAndTheRefinedViews) {
