@@ -91,11 +91,13 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
       fit.at("seconds").at("total").get<double>());
   // 65 frames: 0, 8, ..., 64 held out.
   EXPECT_EQ(held_out, 9u);
-  // Stereo depth keeps the estimated-depth weight of the depth loss.
+  // Stereo depth keeps the estimated-depth weight of the depth loss, and
+  // the expansion warps with rendered depth.
   EXPECT_EQ(frames.at("depth_source").get<std::string>(), "stereo");
   EXPECT_NE(fit.dump().find("\"depth_weight\":1.0"), std::string::npos);
   EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
   EXPECT_FALSE(fit.at("expansion").at("steps").empty());
+  EXPECT_EQ(fit["expansion"].at("options").at("warp_depth"), "rendered");
   // Measured (2 cores, 1000 iterations, an expansion every 400): held out
   // 21.66 dB; without expansion, training 22.3 and held out 21.2.
   EXPECT_GT(train_psnr, 20.0);
