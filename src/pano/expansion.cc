@@ -133,25 +133,19 @@ cv::Mat ReadDepth(const std::filesystem::path& path,
   return depth;
 }
 
-// z-depth rendered from the trainer's Gaussians where they are opaque
-// enough to trust (kWarpAlpha), 0 elsewhere.
-cv::Mat RenderedDepth(Trainer* trainer, const RasterCamera& camera, int time,
-                      RenderOutput* out) {
-  trainer->Render(camera, time, out);
+// The depth `view` is warped with (WarpDepth): z-depth rendered from the
+// trainer's Gaussians where they are opaque enough to trust (kWarpAlpha),
+// 0 elsewhere; with kGiven, the view's own depth wherever it has some.
+cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
+                    WarpDepth warp_depth, RenderOutput* out) {
+  const RasterCamera& camera = view.camera;
+  trainer->Render(camera, view.time, out);
   cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(0));
   for (std::size_t p = 0; p < out->depth.size(); ++p)
     if (out->alpha[p] >= kWarpAlpha)
       depth.at<float>(static_cast<int>(p)) = out->depth[p];
-  return depth;
-}
-
-// The depth `view` is warped with (WarpDepth): rendered, and with kGiven
-// the view's own depth wherever it has some (> 0).
-cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
-                    WarpDepth warp_depth, RenderOutput* out) {
-  cv::Mat depth = RenderedDepth(trainer, view.camera, view.time, out);
   if (warp_depth == WarpDepth::kGiven && !view.depth.empty()) {
-    const cv::Mat given(view.camera.height, view.camera.width, CV_32FC1,
+    const cv::Mat given(camera.height, camera.width, CV_32FC1,
                         const_cast<float*>(view.depth.data()));
     given.copyTo(depth, given > 0);
   }
