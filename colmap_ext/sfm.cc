@@ -10,7 +10,8 @@
 
 #include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/database.h"
-#include "colmap_ext/dynamic_masks.h"
+#include "colmap_ext/masks.h"
+#include "src/geometry/motion_segmentation.h"
 #include "colmap_ext/model.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
@@ -20,6 +21,7 @@
 #include "src/core/progress.h"
 #include "src/core/timer.h"
 #include "src/core/video.h"
+#include "src/core/workspace.h"
 
 #include <cstdio>
 
@@ -268,6 +270,22 @@ int SelectLargestModel(const fs::path& sparse) {
 
 }  // namespace
 
+nlohmann::json SfmOptions::ToJson() const {
+  return {{"video", video.string()},
+          {"images", images.string()},
+          {"known_frames", known.size()},
+          {"workspace", workspace.string()},
+          {"camera_model", camera_model},
+          {"matcher", matcher},
+          {"stride", stride},
+          {"max_frames", max_frames},
+          {"max_size", max_size},
+          {"dynamic_masks", dynamic_masks},
+          {"single_camera", single_camera},
+          {"force", force},
+          {"colmap", colmap.string()}};
+}
+
 void SfmOptions::Check() const {
   if (!video.empty() + !images.empty() + !known.empty() != 1) {
     throw Error("sfm", "--video/--images/--dataset", "",
@@ -299,9 +317,11 @@ void SfmOptions::Check() const {
 SfmReport RunSfm(const SfmOptions& o) {
   o.Check();
   const ColmapRunner colmap(o.colmap);
-  const fs::path ws = o.workspace, logs = ws / "pano4d" / "logs";
-  const fs::path images_dir = ws / "images", masks_dir = ws / "masks";
-  const fs::path database = ws / "database.db", sparse = ws / "sparse";
+  const Workspace workspace(o.workspace);
+  const fs::path ws = workspace.root(), logs = workspace.logs();
+  const fs::path images_dir = workspace.images();
+  const fs::path masks_dir = workspace.colmap_masks();
+  const fs::path database = workspace.database(), sparse = workspace.sparse();
   EnsureDirectory(logs);
   Stamps stamps(logs, o.force);
   SfmReport report;
@@ -364,7 +384,7 @@ SfmReport RunSfm(const SfmOptions& o) {
       const std::vector<cv::Mat> masks = ComputeDynamicMasks(bgr, {}, &stats);
       fs::remove_all(masks_dir);
       WriteColmapMasks(masks, names, masks_dir);
-      WriteDynamicMasks(masks, names, ws / "pano4d" / "tracks" / "dynamic");
+      WriteDynamicMasks(masks, names, workspace.dynamic_masks());
       PANO4D_LOG(kInfo) << "sfm: " << stats.BriefReport();
       report.mean_dynamic_fraction = stats.MeanDynamicFraction();
     });
@@ -375,7 +395,7 @@ SfmReport RunSfm(const SfmOptions& o) {
     double sum = 0;
     for (const fs::path& f : frames) {
       const cv::Mat mask = ReadMask(MaskPathFor(
-          ws / "pano4d" / "tracks" / "dynamic", f.filename().string()));
+          workspace.dynamic_masks(), f.filename().string()));
       sum += cv::countNonZero(mask) / static_cast<double>(mask.total());
     }
     report.mean_dynamic_fraction = sum / frames.size();
@@ -391,7 +411,7 @@ SfmReport RunSfm(const SfmOptions& o) {
       known.empty() ? o.camera_model
                     : std::string(known.front().camera.camera.info().name);
   const bool single_camera = known.empty() ? o.single_camera : known_shared;
-  const fs::path image_list = ws / "pano4d" / "image_list.txt";
+  const fs::path image_list = workspace.image_list();
   step("feature_extractor",
        {{"camera_model", camera_model},
         {"single_camera", single_camera},
@@ -445,7 +465,7 @@ SfmReport RunSfm(const SfmOptions& o) {
         "point_triangulator", {{"frames", report.frames}},
         [&] { return DetectModelFormat(sparse / "0").has_value(); },
         [&] {
-          const fs::path input = ws / "pano4d" / "known_model";
+          const fs::path input = workspace.known_model();
           fs::remove_all(input);
           WriteModel(KnownModel(known, database), input, ColmapFormat::kText);
           fs::remove_all(sparse);
@@ -497,7 +517,7 @@ SfmReport RunSfm(const SfmOptions& o) {
                c.model_id != static_cast<int>(CameraModelId::kPinhole);
       });
   if (distorted) {
-    const fs::path out = ws / "pano4d" / "undistorted";
+    const fs::path out = workspace.undistorted();
     step(
         "image_undistorter", {{"model_images", mapped.images.size()}},
         [&] { return DetectModelFormat(out / "sparse").has_value(); },
@@ -533,8 +553,9 @@ SfmReport RunSfm(const SfmOptions& o) {
       {"camera_model", o.camera_model},
       {"matcher", matcher},
       {"dynamic_masks", o.dynamic_masks},
-      {"mean_dynamic_fraction", report.mean_dynamic_fraction}};
-  WriteFileAtomically(ws / "pano4d" / "sfm.json", summary.dump(2) + "\n");
+      {"mean_dynamic_fraction", report.mean_dynamic_fraction},
+      {"options", o.ToJson()}};
+  WriteFileAtomically(workspace.sfm_json(), summary.dump(2) + "\n");
   WriteFileAtomically(logs / "timings.json", timings.dump(2) + "\n");
   return report;
 }

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "src/core/posed_camera.h"
 
 namespace pano4d {
@@ -43,6 +45,8 @@ struct SfmOptions {
 
   // Throws pano4d::Error naming the wrong field.
   void Check() const;
+  // Every option (known frames as their count), as sfm.json records them.
+  nlohmann::json ToJson() const;
 };
 
 struct SfmStepReport {

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "evaluation/dataset.h"
+#include "src/datasets/dataset.h"
 
 namespace pano4d {
 

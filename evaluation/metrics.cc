@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "src/core/error.h"
+#include "src/core/psnr.h"
 
 namespace pano4d {
 namespace {
@@ -149,9 +150,7 @@ std::optional<double> Psnr(const cv::Mat& a, const cv::Mat& b,
     }
   }
   if (weight == 0) return std::nullopt;
-  const double mse = sum / std::max(weight, kMaskedMeanEps);
-  if (mse == 0) return std::numeric_limits<double>::infinity();
-  return -10.0 * std::log10(mse);
+  return PsnrFromMse(sum / std::max(weight, kMaskedMeanEps));
 }
 
 std::optional<SsimValue> Ssim(const cv::Mat& a, const cv::Mat& b,

@@ -1,361 +1,95 @@
-// pano4d bench: speed and accuracy tables. `bench camera` measures every
-// camera model: round-trip error over the whole image against the time of
-// one projection and one unprojection.
-#include <algorithm>
+// pano4d bench: speed and accuracy tables (src/pipeline/bench.h), printed as
+// a table or with --json one JSON object per row.
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <random>
-#include <string>
-#include <vector>
 
-#include <omp.h>
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
-#include "src/core/camera.h"
-#include "src/core/camera_check.h"
 #include "src/core/error.h"
-#include "src/core/frames.h"
 #include "src/core/json.h"
-#include "src/core/timer.h"
-#include "src/core/version.h"
-#include "src/gs/trainer.h"
-#include "src/render/bench_scene.h"
-#include "src/render/rasterizer.h"
+#include "src/pipeline/bench.h"
 
 namespace pano4d::cli {
 namespace {
 
-struct BenchCameraOptions {
-  int grid = 64;  // steps along x; y gets 3/4 of it
-  double min_seconds = 0.2;
-  bool json = false;
-};
-
-struct CameraCase {
-  std::string label;
-  Camera camera;
-};
-
-// 640x480 cameras with strong distortion where the model has any. The
-// barrel cases keep the image corners inside the region where the model is
-// one-to-one (see the camera tests for cases beyond it).
-std::vector<CameraCase> BenchCameras() {
-  constexpr int kW = 640;
-  constexpr int kH = 480;
-  const auto make = [](CameraModelId id, std::vector<double> params) {
-    return Camera{id, kW, kH, std::move(params)};
-  };
-  return {
-      {"none", make(CameraModelId::kSimplePinhole, {500, 320, 240})},
-      {"none", make(CameraModelId::kPinhole, {500, 505, 320, 240})},
-      {"k=-0.4", make(CameraModelId::kSimpleRadial, {800, 320, 240, -0.4})},
-      {"k=+0.4", make(CameraModelId::kSimpleRadial, {500, 320, 240, 0.4})},
-      {"k1=-0.4 k2=0.1",
-       make(CameraModelId::kRadial, {800, 320, 240, -0.4, 0.1})},
-      {"k1=-0.4 p=1e-3", make(CameraModelId::kOpenCV,
-                              {800, 805, 320, 240, -0.4, 0.1, 1e-3, -1e-3})},
-      {"80 deg at corner",
-       make(CameraModelId::kOpenCVFisheye,
-            {268, 268, 320, 240, 0.05, -0.01, 0.002, -0.0005})},
-      {"rational",
-       make(CameraModelId::kFullOpenCV, {600, 600, 320, 240, -0.3, 0.08, 1e-3,
-                                         -1e-3, -0.01, 0.05, 0.01, 0.001})},
-      {"omega=0.9", make(CameraModelId::kFOV, {400, 400, 320, 240, 0.9})},
-      {"k=0.05",
-       make(CameraModelId::kSimpleRadialFisheye, {280, 320, 240, 0.05})},
-      {"k1=0.05 k2=-0.01",
-       make(CameraModelId::kRadialFisheye, {280, 320, 240, 0.05, -0.01})},
-      {"thin prism", make(CameraModelId::kThinPrismFisheye,
-                          {280, 280, 320, 240, 0.05, -0.01, 1e-3, -1e-3, 0.002,
-                           -0.0005, 1e-3, -1e-3})},
-  };
-}
-
-// Runs `body` in growing batches until min_seconds have passed; returns
-// nanoseconds per call of `calls_per_body` calls.
-template <typename F>
-double NanosecondsPerCall(double min_seconds, std::int64_t calls_per_body,
-                          F&& body) {
-  std::int64_t repeats = 1;
-  while (true) {
-    Timer timer;
-    for (std::int64_t r = 0; r < repeats; ++r) body();
-    const double seconds = timer.WallSeconds();
-    if (seconds >= min_seconds)
-      return 1e9 * seconds / (repeats * calls_per_body);
-    repeats *= 2;
-  }
-}
-
-int RunBenchCamera(const BenchCameraOptions& options) {
-  const int grid_x = options.grid;
-  const int grid_y = options.grid * 3 / 4;
-  if (!options.json) {
-    std::printf(
-        "pano4d %s bench camera: 640x480, %d pixels per model (edge to edge, "
-        "corners "
-        "included), 1 thread\n",
-        kVersion, (grid_x + 1) * (grid_y + 1));
-    std::printf("%-22s %-18s %13s %6s %6s %11s %13s\n", "model", "distortion",
-                "max err (px)", "fail", "iters", "project ns", "unproject ns");
-  }
-  for (const CameraCase& c : BenchCameras()) {
-    const Camera& camera = c.camera;
-    camera.Check(c.label);
-    const RoundTripStats stats = MeasureRoundTrip(camera, grid_x, grid_y);
-
-    std::vector<Eigen::Vector2d> pixels;
-    std::vector<Eigen::Vector3d> rays;
-    for (int j = 0; j <= grid_y; ++j) {
-      for (int i = 0; i <= grid_x; ++i) {
-        const Eigen::Vector2d pixel(camera.width * double(i) / grid_x,
-                                    camera.height * double(j) / grid_y);
-        const UnprojectResult r = camera.Unproject(pixel);
-        if (!r.ok()) continue;
-        pixels.push_back(pixel);
-        rays.push_back(r.ray);
-      }
-    }
-    double sink = 0.0;
-    const std::int64_t n = static_cast<std::int64_t>(pixels.size());
-    const double project_ns = NanosecondsPerCall(options.min_seconds, n, [&] {
-      for (const Eigen::Vector3d& ray : rays)
-        sink += camera.Project(ray).value_or(Eigen::Vector2d::Zero()).x();
-    });
-    const double unproject_ns = NanosecondsPerCall(options.min_seconds, n, [&] {
-      for (const Eigen::Vector2d& pixel : pixels)
-        sink += camera.Unproject(pixel).ray.x();
-    });
-    // An empty asm that reads `sink` keeps the compiler from dropping the
-    // timed calls (what benchmark::DoNotOptimize does).
-    asm volatile("" : : "r,m"(sink) : "memory");
-    const std::string model(camera.info().name);
-    if (options.json) {
-      std::cout << Json{{"model", model},
-                        {"distortion", c.label},
-                        {"samples", stats.samples},
-                        {"failures", stats.failures},
-                        {"max_error_px", stats.max_error_px},
-                        {"mean_iterations", stats.mean_iterations},
-                        {"project_ns", project_ns},
-                        {"unproject_ns", unproject_ns}}
-                       .dump()
-                << "\n";
-    } else {
-      std::printf("%-22s %-18s %13.2e %6lld %6.1f %11.1f %13.1f\n",
-                  model.c_str(), c.label.c_str(), stats.max_error_px,
-                  static_cast<long long>(stats.failures), stats.mean_iterations,
-                  project_ns, unproject_ns);
-    }
-  }
-  return kExitOk;
-}
-
-struct BenchRenderOptions {
-  std::string workspace;  // a fitted scene instead of the random ones
-  std::vector<int> gaussians = {10000, 100000, 500000};
-  std::vector<std::string> sizes = {"480x360", "960x720"};
-  int width = 0;  // --width/--height: one size instead of the list
-  int height = 0;
-  int repeats = 10;
-  bool json = false;
-};
-
-// The fitted scene of a workspace (`pano4d fit`'s checkpoint) rendered
-// from its training cameras at their times, one camera per run, cycling.
-int RunBenchRenderFitted(const BenchRenderOptions& options) {
-  const int threads = omp_get_max_threads();
-  const std::filesystem::path ws = options.workspace;
-  const GaussianScene scene =
-      ReadCheckpointScene(ws / "pano4d" / "checkpoints" / "fit.ckpt");
-  const WorkspaceFrames frames = ReadWorkspaceFrames(ws);
-  std::vector<RasterCamera> cameras;
-  std::vector<int> times;
-  for (const WorkspaceFrame& f : frames.train) {
-    cameras.push_back(RasterCamera::FromPosed(f.camera));
-    times.push_back(f.time);
-  }
-  GaussianModel model;
-  Rasterizer rasterizer;
-  RenderOutput out;
-  scene.ComposeAt(times[0], &model);
-  rasterizer.Forward(model, cameras[0], {}, &out);  // warm-up
-  std::vector<double> compose_ms, forward_ms, backward_ms;
-  std::uint64_t visible = 0, evaluations = 0;
-  ProjectedGradients grad2d;
-  GaussianGradients grad;
-  for (int r = 0; r < options.repeats; ++r) {
-    const std::size_t v = static_cast<std::size_t>(r) % cameras.size();
-    Timer compose;
-    scene.ComposeAt(times[v], &model);
-    compose_ms.push_back(1e3 * compose.WallSeconds());
-    Timer forward;
-    rasterizer.Forward(model, cameras[v], {}, &out);
-    forward_ms.push_back(1e3 * forward.WallSeconds());
-    visible += rasterizer.stats().visible;
-    evaluations += rasterizer.stats().pixel_evaluations;
-    const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), none;
-    Timer backward;
-    rasterizer.BlendBackward(cameras[v], {}, out, d_rgb, none, none, &grad2d);
-    rasterizer.ProjectBackward(model, cameras[v], grad2d, &grad);
-    backward_ms.push_back(1e3 * backward.WallSeconds());
-  }
-  const auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
-  const double f = median(forward_ms), b = median(backward_ms),
-               c = median(compose_ms);
-  const int width = cameras[0].width, height = cameras[0].height;
-  const Json row = {
-      {"workspace", ws.string()},
-      {"gaussians", scene.size()},
-      {"static", scene.statics.size()},
-      {"dynamic", scene.dynamics.size()},
-      {"width", width},
-      {"height", height},
-      {"threads", threads},
-      {"compose_ms", c},
-      {"forward_ms", f},
-      {"forward_backward_ms", f + b},
-      {"fps", 1e3 / f},
-      {"visible", visible / options.repeats},
-      {"pixel_evaluations_per_s", evaluations / (1e-3 * f * options.repeats)}};
-  if (options.json) {
-    std::cout << row.dump() << "\n";
+// The rows, or with `json` one JSON object per line.
+int Print(const BenchResult& r, bool json) {
+  if (!json) {
+    std::printf("%s", r.table.c_str());
     return kExitOk;
   }
-  std::printf(
-      "pano4d %s bench render: the fitted scene of %s (%zu static, %zu "
-      "dynamic Gaussians) from its %zu training cameras at their times; "
-      "median of %d runs, %d threads\n",
-      kVersion, ws.c_str(), scene.statics.size(), scene.dynamics.size(),
-      cameras.size(), options.repeats, threads);
-  std::printf("%10s %10s %11s %12s %8s %18s %14s\n", "gaussians", "size",
-              "compose ms", "forward ms", "fps", "fwd+bwd ms", "visible");
-  std::printf("%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n",
-              scene.size(), width, height, c, f, 1e3 / f, f + b,
-              static_cast<unsigned long long>(visible / options.repeats));
+  for (const nlohmann::json& row : r.rows) std::cout << row.dump() << "\n";
   return kExitOk;
 }
 
-int RunBenchRender(const BenchRenderOptions& options) {
-  if (!options.workspace.empty()) return RunBenchRenderFitted(options);
-  const int threads = omp_get_max_threads();
-  if (!options.json) {
-    std::printf(
-        "pano4d %s bench render: random view-filling scene, mean 3-sigma "
-        "radius 4 px, "
-        "opacity 0.5; median of %d runs, %d threads\n",
-        kVersion, options.repeats, threads);
-    std::printf("%10s %10s %12s %8s %18s %14s %16s\n", "gaussians", "size",
-                "forward ms", "fps", "fwd+bwd ms", "visible", "evals/s");
-  }
-  std::vector<std::string> sizes = options.sizes;
-  if (options.width > 0 || options.height > 0) {
-    if (options.width <= 0 || options.height <= 0) {
-      throw Error(
-          "--width/--height", "",
-          std::to_string(options.width) + "x" + std::to_string(options.height),
-          "give both, positive");
-    }
-    sizes = {std::to_string(options.width) + "x" +
-             std::to_string(options.height)};
-  }
-  for (const std::string& size : sizes) {
+void AddBenchCamera(CLI::App* bench, Action* action) {
+  struct Options : BenchCameraOptions {
+    bool json = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = bench->add_subcommand(
+      "camera",
+      "Every camera model: round-trip error over the image against ns per "
+      "call");
+  sub->add_option("--grid", o->grid, "Samples along x (y gets 3/4 as many)")
+      ->check(CLI::Range(2, 4096))
+      ->capture_default_str();
+  sub->add_option("--min-seconds", o->min_seconds,
+                  "Minimum timing per measurement")
+      ->check(CLI::Range(0.001, 60.0))
+      ->capture_default_str();
+  sub->add_flag("--json", o->json, "One JSON object per line instead of a table");
+  sub->callback([action, o] {
+    *action = [o] { return Print(RunBenchCamera(*o), o->json); };
+  });
+}
+
+void AddBenchRender(CLI::App* bench, Action* action) {
+  struct Options : BenchRenderOptions {
     int width = 0, height = 0;
-    if (std::sscanf(size.c_str(), "%dx%d", &width, &height) != 2 ||
-        width <= 0 || height <= 0) {
-      throw Error("--size", "", size, "expected WxH, e.g. 480x360");
-    }
-    const RasterCamera camera = BenchCamera(width, height);
-    for (const int n : options.gaussians) {
-      const GaussianModel model =
-          RandomViewFillingScene(static_cast<std::size_t>(n), camera, 4.0f, 1);
-      Rasterizer rasterizer;
-      RenderOutput out;
-      rasterizer.Forward(model, camera, {},
-                         &out);  // warm-up: buffers reach their size
-      std::vector<double> ms;
-      for (int r = 0; r < options.repeats; ++r) {
-        Timer timer;
-        rasterizer.Forward(model, camera, {}, &out);
-        ms.push_back(1e3 * timer.WallSeconds());
-      }
-      std::sort(ms.begin(), ms.end());
-      const double forward_ms = ms[ms.size() / 2];
-      const RasterStats stats = rasterizer.stats();
-      // Forward + backward with a fixed gradient on every output, as a
-      // photometric loss would give.
-      const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), d_depth, d_alpha;
-      ProjectedGradients grad2d;
-      GaussianGradients grad;
-      std::vector<double> ms_fb;
-      for (int r = 0; r < options.repeats; ++r) {
-        Timer timer;
-        rasterizer.Forward(model, camera, {}, &out);
-        rasterizer.BlendBackward(camera, {}, out, d_rgb, d_depth, d_alpha,
-                                 &grad2d);
-        rasterizer.ProjectBackward(model, camera, grad2d, &grad);
-        ms_fb.push_back(1e3 * timer.WallSeconds());
-      }
-      std::sort(ms_fb.begin(), ms_fb.end());
-      const double forward_backward_ms = ms_fb[ms_fb.size() / 2];
-      const double evals_per_s = stats.pixel_evaluations / (forward_ms * 1e-3);
-      if (options.json) {
-        std::cout << Json{{"gaussians", n},
-                          {"width", width},
-                          {"height", height},
-                          {"threads", threads},
-                          {"forward_ms", forward_ms},
-                          {"forward_backward_ms", forward_backward_ms},
-                          {"fps", 1e3 / forward_ms},
-                          {"visible", stats.visible},
-                          {"pixel_evaluations_per_s", evals_per_s}}
-                         .dump()
-                  << "\n";
-      } else {
-        std::printf(
-            "%10d %10s %12.2f %8.1f %18.2f %14llu %16.3g\n", n, size.c_str(),
-            forward_ms, 1e3 / forward_ms, forward_backward_ms,
-            static_cast<unsigned long long>(stats.visible), evals_per_s);
-      }
-    }
-  }
-  return kExitOk;
-}
-
-void AddBenchRender(CLI::App& bench, Action* action) {
-  auto options = std::make_shared<BenchRenderOptions>();
-  CLI::App* sub = bench.add_subcommand("render",
-                                       "Rasterizer speed: forward ms, fps and "
-                                       "Gaussian-pixel evaluations per second");
-  sub->add_option("--workspace", options->workspace,
+    bool json = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = bench->add_subcommand(
+      "render",
+      "Rasterizer speed: forward ms, fps and Gaussian-pixel evaluations per "
+      "second");
+  sub->add_option("--workspace", o->workspace,
                   "Time the scene `pano4d fit` fitted in this workspace "
                   "(its checkpoint) from its training cameras instead")
       ->check(CLI::ExistingDirectory);
-  sub->add_option("--gaussians", options->gaussians,
+  sub->add_option("--gaussians", o->gaussians,
                   "Scene sizes (default 10k, 100k, 500k)")
       ->delimiter(',');
-  sub->add_option("--size", options->sizes,
+  sub->add_option("--size", o->sizes,
                   "Image sizes WxH (default 480x360, 960x720)")
       ->delimiter(',');
-  sub->add_option("--width", options->width,
-                  "Image width (with --height: one size)");
-  sub->add_option("--height", options->height,
+  sub->add_option("--width", o->width, "Image width (with --height: one size)");
+  sub->add_option("--height", o->height,
                   "Image height (with --width: one size)");
-  sub->add_option("--repeats", options->repeats,
+  sub->add_option("--repeats", o->repeats,
                   "Timed runs per case; the median is reported")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  sub->add_flag(
-      "--json", options->json,
-      "One JSON object per line and case (gaussians, width, height, threads, "
-      "forward_ms, forward_backward_ms)");
-  sub->callback([action, options] {
-    *action = [options] { return RunBenchRender(*options); };
+  sub->add_flag("--json", o->json,
+                "One JSON object per line and case (gaussians, width, height, "
+                "threads, forward_ms, forward_backward_ms)");
+  sub->callback([action, o] {
+    *action = [o] {
+      if (o->width > 0 || o->height > 0) {
+        if (o->width <= 0 || o->height <= 0) {
+          throw Error("--width/--height", "",
+                      std::to_string(o->width) + "x" +
+                          std::to_string(o->height),
+                      "give both, positive");
+        }
+        o->sizes = {std::to_string(o->width) + "x" +
+                    std::to_string(o->height)};
+      }
+      return Print(RunBenchRender(*o), o->json);
+    };
   });
 }
 
@@ -365,31 +99,10 @@ void AddBenchCommand(CLI::App& app, Action* action) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Speed and accuracy tables (error against run time)");
   bench->require_subcommand(1);
-
-  auto options = std::make_shared<BenchCameraOptions>();
-  CLI::App* camera =
-      bench->add_subcommand("camera",
-                            "Every camera model: round-trip error over the "
-                            "image against ns per call");
-  camera
-      ->add_option("--grid", options->grid,
-                   "Samples along x (y gets 3/4 as many)")
-      ->check(CLI::Range(2, 4096))
-      ->capture_default_str();
-  camera
-      ->add_option("--min-seconds", options->min_seconds,
-                   "Minimum timing per measurement")
-      ->check(CLI::Range(0.001, 60.0))
-      ->capture_default_str();
-  camera->add_flag("--json", options->json,
-                   "One JSON object per line instead of a table");
-  camera->callback([action, options] {
-    *action = [options] { return RunBenchCamera(*options); };
-  });
-
-  AddBenchRender(*bench, action);
-  AddBenchStability(*bench, action);
-  AddBenchBudget(*bench, action);
+  AddBenchCamera(bench, action);
+  AddBenchRender(bench, action);
+  AddBenchStability(bench, action);
+  AddBenchBudget(bench, action);
 }
 
 }  // namespace pano4d::cli

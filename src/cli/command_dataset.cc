@@ -5,8 +5,9 @@
 
 #include <CLI/CLI.hpp>
 
-#include "evaluation/dataset.h"
+#include "src/datasets/dataset.h"
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 #include "src/core/json.h"
 
 namespace pano4d::cli {
@@ -36,11 +37,7 @@ void AddDatasetCommand(CLI::App& app, Action* action) {
       "image sizes, "
       "and whether RGB, depth and covisible masks are present");
   info->add_option("dir", options->root, "Dataset folder")->required();
-  info->add_option(
-          "--factor", options->factor,
-          "Resolution folder to describe (DyCheck: 1 for 1x, 2 for 2x)")
-      ->check(CLI::IsMember({1, 2}))
-      ->capture_default_str();
+  AddFactorOption(info, &options->factor);
   info->callback([action, options] {
     *action = [options] { return RunDatasetInfo(*options); };
   });

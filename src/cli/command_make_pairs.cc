@@ -25,13 +25,8 @@ struct MakePairsCommandOptions {
 
 int RunMakePairsCommand(const MakePairsCommandOptions& o) {
   const WorkspaceFrames frames = ReadWorkspaceFrames(o.workspace);
-  std::vector<WorkspaceFrame> train = frames.train;
-  std::stable_sort(train.begin(), train.end(),
-                   [](const WorkspaceFrame& a, const WorkspaceFrame& b) {
-                     return a.time < b.time;
-                   });
   const PairsReport report =
-      MakeTrainingPairs(LoadTrainingViews(train), o.pairs, o.out);
+      MakeTrainingPairs(LoadTrainingViews(frames.train), o.pairs, o.out);
   WriteJson(o.out / "pairs.json", report.ToJson());
   std::printf(
       "pano4d make-pairs: %d clips of %d frames in %s (masked: %.1f%% of "

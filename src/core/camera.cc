@@ -490,4 +490,27 @@ Camera CameraFromJson(const nlohmann::json& json, const std::string& source) {
   return camera;
 }
 
+Camera AsPinhole(const Camera& camera, const std::string& source) {
+  const CameraModelId id = camera.model_id;
+  if (id == CameraModelId::kSimplePinhole || id == CameraModelId::kPinhole)
+    return camera;
+  const bool single = GetCameraModelInfo(id).single_focal;
+  const std::size_t intrinsic = single ? 3 : 4;
+  for (std::size_t i = intrinsic; i < camera.params.size(); ++i) {
+    if (camera.params[i] != 0.0) {
+      throw Error(source, "camera", std::string(GetCameraModelInfo(id).name),
+                  "has lens distortion; pano4d fits pinhole cameras "
+                  "(undistort the frames first, e.g. `pano4d sfm` runs colmap "
+                  "image_undistorter)");
+    }
+  }
+  Camera out = camera;
+  out.model_id = CameraModelId::kPinhole;
+  out.params = single ? std::vector<double>{camera.params[0], camera.params[0],
+                                            camera.params[1], camera.params[2]}
+                      : std::vector<double>(camera.params.begin(),
+                                            camera.params.begin() + 4);
+  return out;
+}
+
 }  // namespace pano4d

@@ -120,6 +120,13 @@ struct Camera {
 // coordinates would overflow or flip sign.
 inline constexpr double kMinProjectDepth = 1e-9;
 
+// `camera` as a pinhole camera: SIMPLE_PINHOLE and PINHOLE as they are, any
+// other model as PINHOLE (fx, fy, cx, cy) when all its distortion
+// parameters are 0.
+// Throws pano4d::Error naming `source` when the camera has distortion:
+// pano4d fits pinhole cameras, so the frames must be undistorted first.
+Camera AsPinhole(const Camera& camera, const std::string& source);
+
 // JSON form: {"model": "OPENCV", "width": W, "height": H, "params": [...]}.
 nlohmann::json CameraToJson(const Camera& camera);
 // Parses and Check()s; errors name `source` and the field.

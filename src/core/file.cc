@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -96,6 +97,13 @@ void EnsureDirectory(const fs::path& dir) {
   if (!fs::is_directory(dir)) {
     throw Error::In(dir.string(), "exists but is not a directory");
   }
+}
+
+std::string ZeroPadded(std::int64_t value, int width) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%0*lld", width,
+                static_cast<long long>(value));
+  return buffer;
 }
 
 }  // namespace pano4d

@@ -32,4 +32,8 @@ void WriteFileAtomically(const std::filesystem::path& path,
 // Creates `dir` (and parents) or throws an Error naming it.
 void EnsureDirectory(const std::filesystem::path& dir);
 
+// `value` with leading zeros to `width` digits, for file names that sort
+// (5: frames and times, "00042"; 2: expansion steps, "03").
+std::string ZeroPadded(std::int64_t value, int width);
+
 }  // namespace pano4d

@@ -6,6 +6,7 @@
 
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/workspace.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -93,7 +94,7 @@ void WorkspaceFrames::Check(const std::string& source) const {
 }
 
 fs::path FramesPath(const fs::path& workspace) {
-  return workspace / "pano4d" / "frames.json";
+  return Workspace(workspace).frames_json();
 }
 
 void WriteWorkspaceFrames(const fs::path& workspace,
@@ -110,6 +111,7 @@ void WriteWorkspaceFrames(const fs::path& workspace,
              {"dataset", Stored(workspace, frames.dataset)},
              {"dataset_factor", frames.dataset_factor},
              {"num_times", frames.num_times},
+             {"depth_options", frames.depth_options},
              {"train", train},
              {"val", val}});
 }
@@ -130,6 +132,7 @@ WorkspaceFrames ReadWorkspaceFrames(const fs::path& workspace) {
   frames.dataset =
       Loaded(workspace, GetJsonOr<std::string>(j, "dataset", "", source));
   frames.dataset_factor = GetJsonOr<int>(j, "dataset_factor", 0, source);
+  frames.depth_options = GetJsonOr<Json>(j, "depth_options", Json(), source);
   for (const Json& f : GetJson<Json>(j, "train", source))
     frames.train.push_back(FrameFromJson(workspace, f, source));
   for (const Json& f : GetJsonOr<Json>(j, "val", Json::array(), source))

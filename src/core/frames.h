@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "src/core/posed_camera.h"
 
 namespace pano4d {
@@ -39,6 +41,8 @@ struct WorkspaceFrames {
   std::filesystem::path dataset;
   int dataset_factor = 0;
   int num_times = 0;
+  // The depth stage's options, for the record (null when not stored).
+  nlohmann::json depth_options;
   std::vector<WorkspaceFrame> train;
   std::vector<WorkspaceFrame> val;  // held-out frames; may be empty
 

@@ -248,4 +248,30 @@ void WritePng8(const std::filesystem::path& path, const cv::Mat& image) {
                              bytes.size()));
 }
 
+namespace {
+
+template <typename T>
+cv::Mat View(const std::vector<T>& data, int height, int width, int channels) {
+  if (data.empty()) return cv::Mat();
+  if (height <= 0 || width <= 0 || channels <= 0 ||
+      data.size() != static_cast<std::size_t>(height) * width * channels) {
+    throw Error("image buffer", "size", std::to_string(data.size()),
+                "expected " + std::to_string(height) + " x " +
+                    std::to_string(width) + " x " + std::to_string(channels));
+  }
+  // cv::Mat's vector constructor shares the vector's data.
+  return cv::Mat(data, /*copyData=*/false).reshape(channels, height);
+}
+
+}  // namespace
+
+cv::Mat MatView(const std::vector<float>& data, int height, int width,
+                int channels) {
+  return View(data, height, width, channels);
+}
+
+cv::Mat MatView(const std::vector<std::uint8_t>& data, int height, int width) {
+  return View(data, height, width, 1);
+}
+
 }  // namespace pano4d

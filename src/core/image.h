@@ -61,6 +61,21 @@ std::vector<std::uint8_t> EncodeImage(const Image& image,
 // Writes atomically (temporary name, then rename).
 void WriteImage(const std::filesystem::path& path, const Image& image);
 
+// OpenCV headers over pano4d's row-major buffers (a TrainingView's, a
+// RenderOutput's): H x W x `channels` floats (CV_32FC<channels>) or H x W
+// bytes (CV_8UC1), without a copy. Valid while `data` lives and keeps its
+// size; read-only by contract (OpenCV has no const header), so a caller
+// that writes clones first. Throws pano4d::Error when the size does not
+// match (an empty buffer gives an empty header).
+cv::Mat MatView(const std::vector<float>& data, int height, int width,
+                int channels = 1);
+cv::Mat MatView(const std::vector<std::uint8_t>& data, int height, int width);
+
+// Masks across every module boundary are CV_8UC1 (or bytes) with 0 = no and
+// 255 = yes, as the files hold them (DESIGN.md); readers take any nonzero
+// value as yes.
+inline constexpr std::uint8_t kMaskOn = 255;
+
 // Single-channel 8-bit images: masks (0 or 255, DESIGN.md) and label maps
 // (instance ids). ReadMask takes the first channel of whatever the file
 // holds, converted to 8 bits; WriteMask needs a CV_8UC1 matrix and writes a

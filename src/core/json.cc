@@ -37,6 +37,31 @@ std::string JsonValueForMessage(const Json& value, std::size_t max_chars) {
   return text;
 }
 
+std::optional<JsonDifference> FirstDifference(const Json& first,
+                                              const Json& second) {
+  if (first == second) return std::nullopt;
+  if (!first.is_object() || !second.is_object())
+    return JsonDifference{"", first, second};
+  // nlohmann's objects iterate in key order.
+  Json keys = Json::object();
+  for (const auto& item : first.items()) keys[item.key()] = true;
+  for (const auto& item : second.items()) keys[item.key()] = true;
+  for (const auto& item : keys.items()) {
+    const std::string& key = item.key();
+    const Json a = first.contains(key) ? first[key] : Json();
+    const Json b = second.contains(key) ? second[key] : Json();
+    if (first.contains(key) && second.contains(key)) {
+      if (std::optional<JsonDifference> d = FirstDifference(a, b)) {
+        d->path = d->path.empty() ? key : key + "." + d->path;
+        return d;
+      }
+    } else {
+      return JsonDifference{key, a, b};
+    }
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 const Json& Field(const Json& object, const std::string& key,

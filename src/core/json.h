@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -63,5 +64,16 @@ T GetJsonOr(const Json& object, const std::string& key, const T& fallback,
 
 // The value rendered for an error message, shortened to `max_chars`.
 std::string JsonValueForMessage(const Json& value, std::size_t max_chars = 60);
+
+// Where two JSON values first differ, as a key path into objects ("init.
+// num_bases"; the empty path when the values themselves differ in type or
+// as arrays or scalars), with both values; nothing when they are equal.
+// Keys are visited in order, and a key only one side has is a difference.
+struct JsonDifference {
+  std::string path;
+  Json first, second;  // absent on a side: null
+};
+std::optional<JsonDifference> FirstDifference(const Json& first,
+                                              const Json& second);
 
 }  // namespace pano4d

@@ -57,6 +57,12 @@ class Adam {
   // The moments of a group, for checkpoints.
   std::vector<float>& first_moment(int group) { return groups_[group].m; }
   std::vector<float>& second_moment(int group) { return groups_[group].v; }
+  const std::vector<float>& first_moment(int group) const {
+    return groups_[group].m;
+  }
+  const std::vector<float>& second_moment(int group) const {
+    return groups_[group].v;
+  }
   void set_step(std::int64_t step) { step_ = step; }
   // After a checkpoint replaced every group's parameters and moments with
   // arrays of another row count: takes the count from them. Throws

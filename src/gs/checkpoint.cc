@@ -38,11 +38,10 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
   arrays.push_back({"logits", &scene_.logits});
   arrays.push_back({"bases.rotations", &scene_.bases.rotations});
   arrays.push_back({"bases.translations", &scene_.bases.translations});
-  Trainer& self = const_cast<Trainer&>(*this);  // moment accessors
   nlohmann::json adams = nlohmann::json::object();
-  for (auto [name, adam] : {std::pair{"static", &self.static_adam_},
-                            {"dynamic", &self.dynamic_adam_},
-                            {"basis", &self.basis_adam_}}) {
+  for (auto [name, adam] : {std::pair{"static", &static_adam_},
+                            {"dynamic", &dynamic_adam_},
+                            {"basis", &basis_adam_}}) {
     adams[name] = adam->step();
     for (int g = 0; g < adam->groups(); ++g) {
       arrays.push_back(
@@ -65,6 +64,7 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
   nlohmann::json header = {{"format", "pano4d checkpoint 1"},
                            {"iteration", iteration_},
                            {"options", options_.ToJson()},
+                           {"fingerprint", fingerprint_},
                            {"views", names},
                            {"rng", rng_state.str()},
                            {"order", order_},
@@ -193,6 +193,21 @@ struct CheckpointFile {
 
 }  // namespace
 
+Json ReadCheckpointFingerprint(const fs::path& path) {
+  try {
+    const CheckpointFile file(path);
+    return file.header.contains("fingerprint") ? file.header["fingerprint"]
+                                               : Json();
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), "header", "",
+                std::string("malformed checkpoint header: ") + e.what());
+  }
+}
+
+void Trainer::SetFingerprint(nlohmann::json fingerprint) {
+  fingerprint_ = std::move(fingerprint);
+}
+
 GaussianScene ReadCheckpointScene(const fs::path& path) {
   try {
     return CheckpointFile(path).Scene();
@@ -213,12 +228,18 @@ void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
                 "the checkpoint belongs to other frames "
                 "(delete it or use another workspace)");
   }
-  nlohmann::json saved_options = header.at("options");
-  nlohmann::json current = options_.ToJson();
-  if (saved_options != current) {
-    throw Error(source, "options", "",
-                "the checkpoint was written with other fit options (run with "
-                "the same options, or without --resume to start over)");
+  if (!header.contains("fingerprint")) {
+    throw Error(source, "fingerprint", "",
+                "missing: the checkpoint is from a pano4d that did not record "
+                "its options; fit without --resume to start over");
+  }
+  if (const std::optional<JsonDifference> d =
+          FirstDifference(header["fingerprint"], fingerprint_)) {
+    throw Error(source, d->path.empty() ? "options" : "option " + d->path,
+                JsonValueForMessage(d->first),
+                "this run has " + JsonValueForMessage(d->second) +
+                    ": resume with the options the checkpoint was written "
+                    "with, or fit without --resume to start over");
   }
   if (header.at("num_bases").get<int>() != scene_.bases.num_bases ||
       header.at("sh_degree").get<int>() != scene_.statics.sh_degree ||

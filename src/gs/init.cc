@@ -11,9 +11,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
+#include "src/core/image.h"
 #include "src/core/log.h"
 #include "src/core/median.h"
 #include "src/geometry/inpaint.h"
+#include "src/render/sh.h"
 
 namespace pano4d {
 namespace {
@@ -88,8 +90,7 @@ std::vector<float> DepthForMotion(const TrainingView& v) {
 // visible surface, which one camera never sees.
 cv::Mat ChordPixels(const TrainingView& v) {
   const int w = v.camera.width, h = v.camera.height;
-  const cv::Mat dynamic(h, w, CV_8UC1,
-                        const_cast<std::uint8_t*>(v.dynamic.data()));
+  const cv::Mat dynamic = MatView(v.dynamic, h, w);
   cv::Mat edge_distance, half_width;
   cv::distanceTransform(dynamic != 0, edge_distance, cv::DIST_L2,
                         cv::DIST_MASK_5);
@@ -145,7 +146,7 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
     m.quats[i * 4 + 1] = m.quats[i * 4 + 2] = m.quats[i * 4 + 3] = 0;
     m.opacities[i] = opacity;
     for (int c = 0; c < 3; ++c)
-      m.sh[(i * k) * 3 + c] = (cloud.colors[i][c] - 0.5f) / kShC0;
+      m.sh[(i * k) * 3 + c] = (cloud.colors[i][c] - 0.5f) / static_cast<float>(kShC0);
   }
   return m;
 }
@@ -183,6 +184,38 @@ void InitOptions::Check() const {
   tracks.Check();
 }
 
+nlohmann::json InitOptions::ToJson() const {
+  return {{"pixel_stride", pixel_stride},
+          {"voxel_pixels", voxel_pixels},
+          {"filter",
+           {{"neighbours", filter.neighbours},
+            {"std_ratio", filter.std_ratio},
+            {"voxel_size", filter.voxel_size}}},
+          {"max_static", max_static},
+          {"max_dynamic", max_dynamic},
+          {"num_bases", num_bases},
+          {"dynamic_thickness", dynamic_thickness},
+          {"dynamic_layers", dynamic_layers},
+          {"track_stride", track_stride},
+          {"tracks", {{"consistency_threshold", tracks.consistency_threshold}}},
+          {"min_tracks_per_fit", min_tracks_per_fit},
+          {"initial_opacity", initial_opacity},
+          {"sh_degree", sh_degree}};
+}
+
+nlohmann::json InitReport::ToJson() const {
+  return {{"static_points_raw", static_points_raw},
+          {"static_points", static_points},
+          {"dynamic_points_raw", dynamic_points_raw},
+          {"dynamic_points", dynamic_points},
+          {"tracks", tracks},
+          {"track_coverage", track_coverage},
+          {"num_bases", num_bases},
+          {"canonical_time", canonical_time},
+          {"voxel_size", voxel_size},
+          {"seconds", seconds}};
+}
+
 std::string InitReport::Brief() const {
   std::ostringstream s;
   s << "init: " << static_points << " static Gaussians (of "
@@ -196,7 +229,7 @@ std::string InitReport::Brief() const {
 
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                               int num_times, const InitOptions& o,
-                              InitReport* report_out) {
+                              std::uint64_t seed, InitReport* report_out) {
   o.Check();
   const auto start = std::chrono::steady_clock::now();
   InitReport report;
@@ -332,8 +365,7 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
     if (!v || v->camera.width != ref->camera.width ||
         v->camera.height != ref->camera.height)
       continue;
-    frames[t] = cv::Mat(v->camera.height, v->camera.width, CV_32FC3,
-                        const_cast<float*>(v->rgb.data()));
+    frames[t] = MatView(v->rgb, v->camera.height, v->camera.width, 3);
   }
   std::vector<Eigen::Vector2f> seeds;
   for (int y = 0; y < ref->camera.height; y += o.track_stride)
@@ -394,7 +426,7 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
       }
     }
     cv::Mat label_mat, centres;
-    cv::theRNG().state = o.seed + 1;  // cv::kmeans draws from OpenCV's RNG
+    cv::theRNG().state = seed + 1;  // cv::kmeans draws from OpenCV's RNG
     cv::kmeans(features, k, label_mat,
                cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
                                 50, 1e-6),

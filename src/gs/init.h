@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "src/geometry/point_cloud.h"
 #include "src/geometry/tracks.h"
 #include "src/gs/scene.h"
@@ -48,8 +50,8 @@ struct InitOptions {
   int min_tracks_per_fit = 6;
   double initial_opacity = 0.1;
   int sh_degree = 0;
-  std::uint64_t seed = 0;
   void Check() const;  // throws pano4d::Error naming the field
+  nlohmann::json ToJson() const;
 };
 
 struct InitReport {
@@ -62,6 +64,7 @@ struct InitReport {
   double voxel_size = 0.0;
   double seconds = 0.0;
   std::string Brief() const;  // one line for logs
+  nlohmann::json ToJson() const;
 };
 
 // Gaussians at the cloud's points: colour as SH degree 0, isotropic scale
@@ -72,9 +75,11 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
                                  const InitOptions& options);
 
 // `views` as the trainer uses them (depth required on the views that
-// contribute; views without depth are skipped with a warning).
+// contribute; views without depth are skipped with a warning). `seed`
+// draws the motion clusters' k-means start.
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                               int num_times, const InitOptions& options,
+                              std::uint64_t seed,
                               InitReport* report = nullptr);
 
 }  // namespace pano4d

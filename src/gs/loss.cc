@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
+#include "src/core/image.h"
 
 namespace pano4d {
 namespace {
@@ -45,8 +46,8 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
   if (!(ssim_weight >= 0 && ssim_weight <= 1))
     throw Error("photometric loss", "ssim_weight", std::to_string(ssim_weight),
                 "must be in [0, 1]");
-  cv::Mat r(height, width, CV_32FC3, const_cast<float*>(rendered.data()));
-  cv::Mat t(height, width, CV_32FC3, const_cast<float*>(target.data()));
+  const cv::Mat r = MatView(rendered, height, width, 3);
+  const cv::Mat t = MatView(target, height, width, 3);
   if (!cv::checkRange(r) || !cv::checkRange(t))
     throw Error("photometric loss", "image", "", "holds NaN or infinity");
 

@@ -9,9 +9,6 @@
 
 namespace pano4d {
 
-// SH degree-0 constant of 3D Gaussian splatting: colour = C0 * dc + 0.5.
-inline constexpr float kShC0 = 0.28209479177387814f;
-
 // The 4D scene: static Gaussians in world coordinates, and dynamic
 // Gaussians in the canonical frame (the world at time `canonical_time`)
 // moved by the motion bases. A scene without dynamic content has no

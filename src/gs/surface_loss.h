@@ -76,7 +76,7 @@ struct HiddenDepth {
 };
 
 // weight x the mean over the Gaussians of rows [first, N) whose centre
-// projects onto a pixel of `mask` (1 = moving) with a depth d of
+// projects onto a pixel of `mask` (nonzero = moving) with a depth d of
 //   max(0, z / d - 1 - thickness),
 // z the centre's camera depth; the others are left out. Adds dL/dmeans to
 // the N x 3 array `d_means` (sized like the model). `depth` and `mask` are

@@ -13,6 +13,7 @@
 #include "src/core/log.h"
 #include "src/core/median.h"
 #include "src/core/npy.h"
+#include "src/core/psnr.h"
 #include "src/gs/loss.h"
 #include "src/gs/surface_loss.h"
 
@@ -115,7 +116,7 @@ std::vector<TrainingView> LoadTrainingViews(
       v.dynamic.resize(static_cast<std::size_t>(w) * h);
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
-          v.dynamic[y * w + x] = mask.at<std::uint8_t>(y, x) >= 128;
+          v.dynamic[y * w + x] = mask.at<std::uint8_t>(y, x) >= 128 ? kMaskOn : 0;
     }
   }
   return views;
@@ -170,7 +171,6 @@ void TrainerOptions::Check() const {
 
 nlohmann::json TrainerOptions::ToJson() const {
   return {{"iterations", iterations},
-          {"seed", seed},
           {"ssim_weight", ssim_weight},
           {"depth_weight", depth_weight},
           {"smoothness_weight", smoothness_weight},
@@ -202,15 +202,16 @@ nlohmann::json TrainerOptions::ToJson() const {
 }
 
 Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
-                 TrainerOptions options)
+                 TrainerOptions options, std::uint64_t seed)
     : options_(std::move(options)),
       scene_(std::move(scene)),
       views_(std::move(views)),
-      rng_(options_.seed) {
+      rng_(seed) {
   options_.Check();
   scene_.Check();
   if (options_.densify_until < 0)
     options_.densify_until = options_.iterations / 2;
+  fingerprint_ = options_.ToJson();
   if (views_.empty()) {
     throw Error("fit", "views", "0", "no training views");
   }
@@ -426,7 +427,7 @@ StepReport Trainer::Step() {
     mse += e * e;
   }
   mse /= static_cast<double>(out_.rgb.size());
-  report.psnr = mse > 0 ? -10.0 * std::log10(mse) : 99.0;
+  report.psnr = PsnrFromMse(mse);
   d_depth_.clear();
   const float median = median_depth_[&view - views_.data()];
   if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 
 #include "src/core/frames.h"
 #include "src/gs/adam.h"
@@ -24,7 +24,7 @@ struct TrainingView {
   RasterCamera camera;
   std::vector<float> rgb;             // H x W x 3
   std::vector<float> depth;           // H x W z-depth, 0 = none; may be empty
-  std::vector<std::uint8_t> dynamic;  // H x W, 1 = dynamic; may be empty
+  std::vector<std::uint8_t> dynamic;  // H x W, 255 = dynamic; may be empty
 };
 
 // Reads the images, depth maps and dynamic masks of `frames`. Throws
@@ -33,14 +33,21 @@ struct TrainingView {
 std::vector<TrainingView> LoadTrainingViews(
     const std::vector<WorkspaceFrame>& frames);
 
+// The depth loss' weight on depth the dataset gives (rendered, a depth
+// sensor) and on depth pano4d estimated (stereo, or another tool's maps
+// aligned to the SfM points), whose holes and errors a strong weight would
+// bake into the geometry. The fit chooses by the frames' depth source
+// (ResolveFitOptions, src/pipeline/fit_options.h).
+inline constexpr double kGivenDepthWeight = 5.0;
+inline constexpr double kEstimatedDepthWeight = 1.0;
+
 struct TrainerOptions {
   int iterations = 10000;
-  std::uint64_t seed = 0;
   // Losses: (1 - ssim_weight) L1 + ssim_weight D-SSIM on the video; plus
   // depth_weight times the mean |rendered - given| / median given depth
   // over pixels with depth; plus the bases' acceleration penalty.
   double ssim_weight = 0.2;
-  double depth_weight = 1.0;
+  double depth_weight = kEstimatedDepthWeight;
   double smoothness_weight = 1.0;
   // Shape regulariser (PhysGaussian's): anisotropy_weight times the mean
   // over Gaussians of max(0, largest / smallest scale - max_anisotropy).
@@ -115,7 +122,7 @@ struct ExtraView {
   RasterCamera camera;
   int time = 0;
   std::vector<float> target;       // H x W x 3
-  std::vector<std::uint8_t> mask;  // H x W, 1 = M_e (generated content)
+  std::vector<std::uint8_t> mask;  // H x W, 255 = M_e (generated content)
   double weight = 0.1;
   double outside_weight = 0.0;
 };
@@ -140,11 +147,15 @@ struct PhaseTimes {
 // LoadCheckpoint then restores). Throws pano4d::Error naming the file when
 // it is not a pano4d checkpoint, is truncated or holds non-finite values.
 GaussianScene ReadCheckpointScene(const std::filesystem::path& path);
+// The fingerprint a checkpoint was written with (Trainer::SetFingerprint);
+// null for a checkpoint from before pano4d stored one.
+nlohmann::json ReadCheckpointFingerprint(const std::filesystem::path& path);
 
 class Trainer {
  public:
+  // `seed` draws the training order (each view once per shuffled epoch).
   Trainer(GaussianScene scene, std::vector<TrainingView> views,
-          TrainerOptions options);
+          TrainerOptions options, std::uint64_t seed);
   // The optimisers hold pointers into the scene: not copyable or movable.
   Trainer(const Trainer&) = delete;
   Trainer& operator=(const Trainer&) = delete;
@@ -169,11 +180,17 @@ class Trainer {
 
   // Everything a resumed run needs to continue as if never stopped
   // (parameters, optimiser moments, densification statistics, the random
-  // generator, the epoch order), written atomically (checkpoint.cc).
+  // generator, the epoch order) and the fingerprint, written atomically
+  // (checkpoint.cc).
   void SaveCheckpoint(const std::filesystem::path& path) const;
-  // Throws pano4d::Error naming the file when it is corrupt or belongs to
-  // another scene (other views or options).
+  // Throws pano4d::Error naming the file when it is corrupt, belongs to
+  // other frames, or holds another fingerprint (naming the first key that
+  // differs and both values).
   void LoadCheckpoint(const std::filesystem::path& path);
+  // What a run resuming from this trainer's checkpoints must share with the
+  // run that wrote them: the trainer's options, unless the caller owns more
+  // (the fit's resume fingerprint, src/pipeline/fit_options.h).
+  void SetFingerprint(nlohmann::json fingerprint);
 
   // Appends `extra` (the scene's SH degree) to the static Gaussians with
   // fresh optimiser state (the expansion's Gaussians in unseen regions).
@@ -211,6 +228,7 @@ class Trainer {
                 const GaussianGradients* direct = nullptr);
 
   TrainerOptions options_;
+  nlohmann::json fingerprint_;
   GaussianScene scene_;
   std::vector<TrainingView> views_;
   double extent_ = 1.0;

@@ -32,14 +32,6 @@ constexpr float kWarpAlpha = 0.5f;
 // new Gaussian (a later step sees what an earlier one added).
 constexpr float kCoveredAlpha = 0.5f;
 
-std::string Name(const char* prefix, int value, int width) {
-  std::ostringstream s;
-  s << prefix;
-  s.width(width);
-  s.fill('0');
-  s << value;
-  return s.str();
-}
 
 // Colour quantised to 8 bits, as the refinement target is stored (so that a
 // resumed run, which reads the PNGs, sees what the first run saw).
@@ -145,8 +137,7 @@ cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
     if (out->alpha[p] >= kWarpAlpha)
       depth.at<float>(static_cast<int>(p)) = out->depth[p];
   if (warp_depth == WarpDepth::kGiven && !view.depth.empty()) {
-    const cv::Mat given(camera.height, camera.width, CV_32FC1,
-                        const_cast<float*>(view.depth.data()));
+    const cv::Mat given = MatView(view.depth, camera.height, camera.width);
     given.copyTo(depth, given > 0);
   }
   return depth;
@@ -155,9 +146,7 @@ cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
 // A training view's moving pixels (its dynamic mask) as CV_8UC1, 255 =
 // moving.
 cv::Mat MovingMask(const TrainingView& view) {
-  const cv::Mat dynamic(view.camera.height, view.camera.width, CV_8UC1,
-                        const_cast<std::uint8_t*>(view.dynamic.data()));
-  return dynamic != 0;
+  return MatView(view.dynamic, view.camera.height, view.camera.width) != 0;
 }
 
 // The source's moving pixels (CV_8UC1, 255 = moving) forward-warped into
@@ -226,8 +215,7 @@ nlohmann::json ExpansionOptions::ToJson() const {
           {"new_gaussian_stride", new_gaussian_stride},
           {"voxel_pixels", voxel_pixels},
           {"carve_every", carve_every},
-          {"warp_depth", WarpDepthName(warp_depth)},
-          {"seed", seed}};
+          {"warp_depth", WarpDepthName(warp_depth)}};
 }
 
 const char* WarpDepthName(WarpDepth w) {
@@ -248,6 +236,14 @@ std::vector<int> StepsDueAt(const ExpansionOptions& o, std::int64_t iteration,
   std::vector<int> due;
   for (int e = up_to(k - 1) + 1; e <= up_to(k); ++e) due.push_back(e);
   return due;
+}
+
+int LastStepBefore(const ExpansionOptions& o, std::int64_t before,
+                   int iterations) {
+  int last = 0;
+  for (std::int64_t it = o.every; it < before; it += o.every)
+    for (int e : StepsDueAt(o, it, iterations)) last = std::max(last, e);
+  return last;
 }
 
 std::string ExpansionStepReport::Brief() const {
@@ -278,9 +274,10 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"seconds", seconds}};
 }
 
-Expansion::Expansion(ExpansionOptions options, std::filesystem::path out_dir,
-                     Prior* prior)
+Expansion::Expansion(ExpansionOptions options, std::uint64_t seed,
+                     std::filesystem::path out_dir, Prior* prior)
     : options_(std::move(options)),
+      seed_(seed),
       out_dir_(std::move(out_dir)),
       prior_(prior) {
   options_.Check();
@@ -295,7 +292,7 @@ void Expansion::NameViews(const Trainer& trainer,
 }
 
 std::filesystem::path Expansion::StepDir(int e) const {
-  return out_dir_ / Name("step_", e, 2);
+  return out_dir_ / ("step_" + ZeroPadded(e, 2));
 }
 
 void Expansion::Prepare(const Trainer& trainer) {
@@ -320,8 +317,7 @@ void Expansion::Prepare(const Trainer& trainer) {
   for (const TrainingView& v : views) {
     if (v.depth.empty()) continue;
     frames_seen_.push_back(MakeSeenDepth(
-        v.camera, cv::Mat(v.camera.height, v.camera.width, CV_32FC1,
-                          const_cast<float*>(v.depth.data()))));
+        v.camera, MatView(v.depth, v.camera.height, v.camera.width)));
   }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
   if (last_step_ > 0) {
@@ -391,8 +387,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   RenderOutput out;
   for (std::size_t s = 0; s < ns; ++s) {
     const TrainingView& v = views[sources_[s].view];
-    rgb[s] = cv::Mat(v.camera.height, v.camera.width, CV_32FC3,
-                     const_cast<float*>(v.rgb.data()));
+    rgb[s] = MatView(v.rgb, v.camera.height, v.camera.width, 3);
     depth[s] = SourceDepth(trainer, v, options_.warp_depth, &out);
   }
   // The sources' moving pixels, for the prior; empty where a view has no
@@ -413,7 +408,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   Json cameras_json = Json::array();
   for (int m = 0; m < directions; ++m) {
     PriorClip clip;
-    clip.name = Name("step", e, 2) + Name("_dir", m, 1);
+    clip.name = "step" + ZeroPadded(e, 2) + "_dir" + std::to_string(m);
     std::vector<cv::Mat> original_masks(ns);
     for (std::size_t s = 0; s < ns; ++s) {
       const ExpandedView& v = cams[m * ns + s];
@@ -447,7 +442,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       ++report.fallbacks;
       report.prior = prior_->name() + " -> " + filled.prior;
     }
-    const std::filesystem::path dm = dir / Name("dir_", m, 1);
+    const std::filesystem::path dm = dir / ("dir_" + std::to_string(m));
     for (std::size_t s = 0; s < ns; ++s) {
       const ExpandedView& v = cams[m * ns + s];
       const cv::Mat refined =
@@ -489,7 +484,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       focals.push_back(0.5 * (c.fx + c.fy));
       expanded_seen_.push_back(
           MakeSeenDepth(c, refined_depth, original_masks[s]));
-      StoredView stored{c, v.t, cv::Mat(), original_masks[s] / 255};
+      StoredView stored{c, v.t, cv::Mat(), original_masks[s]};
       refined.convertTo(stored.target, CV_8UC3, 255.0);
       views_.push_back(std::move(stored));
     }
@@ -549,7 +544,7 @@ const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
       iteration % options_.refine_every != 0)
     return nullptr;
   const std::size_t i =
-      SplitMix64(options_.seed ^ static_cast<std::uint64_t>(iteration)) %
+      SplitMix64(seed_ ^ static_cast<std::uint64_t>(iteration)) %
       views_.size();
   const StoredView& v = views_[i];
   buffer_.camera = v.camera;
@@ -596,7 +591,7 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
     NameViews(trainer, &cams);
     for (std::size_t k = 0; k < cams.size(); ++k) {
       const ExpandedView& v = cams[k];
-      const std::filesystem::path dm = StepDir(e) / Name("dir_", v.m, 1);
+      const std::filesystem::path dm = StepDir(e) / ("dir_" + std::to_string(v.m));
       const std::string& id = v.name;
       const cv::Mat refined =
           ReadRefined(dm / "refined" / (id + ".png"), v.camera);
@@ -609,7 +604,7 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
       const cv::Mat mask = ReadMask(mask_path);
       CheckSize(mask_path, mask.cols, mask.rows, v.camera);
       expanded_seen_.push_back(MakeSeenDepth(v.camera, depth, mask));
-      StoredView stored{v.camera, v.t, cv::Mat(), mask / 255};
+      StoredView stored{v.camera, v.t, cv::Mat(), mask};
       refined.convertTo(stored.target, CV_8UC3, 255.0);
       views_.push_back(std::move(stored));
     }
@@ -655,8 +650,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
     const RasterCamera& target = cameras[k];
     const TrainingView& v = views[nearest(
         views, times[k], [](const TrainingView& t) { return t.time; })];
-    const cv::Mat rgb(v.camera.height, v.camera.width, CV_32FC3,
-                      const_cast<float*>(v.rgb.data()));
+    const cv::Mat rgb = MatView(v.rgb, v.camera.height, v.camera.width, 3);
     const cv::Mat depth = SourceDepth(trainer, v, options_.warp_depth, &out);
     WarpResult w = ForwardWarp(rgb, depth, v.camera, target);
     if (!v.dynamic.empty())
@@ -668,7 +662,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
       const std::string& id = views[sources_[s].view].name;
       for (const ExpandedView& c : all_cameras_) {
         if (c.name != id) continue;
-        const std::filesystem::path dm = StepDir(c.e) / Name("dir_", c.m, 1);
+        const std::filesystem::path dm = StepDir(c.e) / ("dir_" + std::to_string(c.m));
         loaded.push_back({c.camera,
                           ReadRefined(dm / "refined" / (id + ".png"), c.camera),
                           ReadDepth(dm / "depth" / (id + ".npy"), c.camera)});

@@ -70,7 +70,6 @@ struct ExpansionOptions {
   // steps.
   int carve_every = 100;
   WarpDepth warp_depth = WarpDepth::kRendered;
-  std::uint64_t seed = 0;
 
   void Check() const;  // throws pano4d::Error naming the field
   nlohmann::json ToJson() const;
@@ -80,6 +79,10 @@ struct ExpansionOptions {
 // expansion after `iteration` iterations (empty when none is due).
 std::vector<int> StepsDueAt(const ExpansionOptions& options,
                             std::int64_t iteration, int iterations);
+// The last step that ran before iteration `before` (0: none): where a fit
+// resumed at `before` continues the expansion from.
+int LastStepBefore(const ExpansionOptions& options, std::int64_t before,
+                   int iterations);
 
 struct ExpansionStepReport {
   int step = 0;
@@ -104,8 +107,9 @@ struct ExpansionStepReport {
 // PNGs and depth .npy named after the source frame, cameras.json per step.
 class Expansion {
  public:
-  Expansion(ExpansionOptions options, std::filesystem::path out_dir,
-            Prior* prior);
+  // `seed` with the iteration chooses each step's refinement view.
+  Expansion(ExpansionOptions options, std::uint64_t seed,
+            std::filesystem::path out_dir, Prior* prior);
 
   // Step e (1..E; angle e alpha): depth rendered at the source cameras and
   // held fixed; the original frames warped into every direction's cameras;
@@ -162,7 +166,7 @@ class Expansion {
     RasterCamera camera;
     int time;
     cv::Mat target;  // CV_8UC3 RGB
-    cv::Mat mask;    // CV_8UC1, 1 = M_e
+    cv::Mat mask;    // CV_8UC1, 255 = M_e
   };
   struct Refined {  // step e's result per (direction, source), for chaining
     RasterCamera camera;
@@ -175,6 +179,7 @@ class Expansion {
                  std::vector<ExpandedView>* views) const;
 
   ExpansionOptions options_;
+  std::uint64_t seed_;
   std::filesystem::path out_dir_;
   Prior* prior_;
   bool prepared_ = false;

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
+#include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/progress.h"
@@ -23,20 +25,12 @@ constexpr double kDegrees = M_PI / 180.0;
 // places the panorama centre: plenty for a mean.
 constexpr int kCentroidStride = 8;
 
-std::string Index(int i) {
-  char buffer[16];
-  std::snprintf(buffer, sizeof buffer, "%05d", i);
-  return buffer;
-}
-
 cv::Mat AsMat(const TrainingView& v) {
-  return cv::Mat(v.camera.height, v.camera.width, CV_32FC3,
-                 const_cast<float*>(v.rgb.data()));
+  return MatView(v.rgb, v.camera.height, v.camera.width, 3);
 }
 
 cv::Mat DepthMat(const TrainingView& v) {
-  return cv::Mat(v.camera.height, v.camera.width, CV_32FC1,
-                 const_cast<float*>(v.depth.data()));
+  return MatView(v.depth, v.camera.height, v.camera.width);
 }
 
 }  // namespace
@@ -62,16 +56,27 @@ nlohmann::json PairsReport::ToJson() const {
           {"mask_fraction", mask_fraction}};
 }
 
-PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
+PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
                               const PairOptions& o,
                               const std::filesystem::path& out) {
   o.Check();
-  if (views.empty()) {
+  if (given.empty()) {
     throw Error("make-pairs", "views", "0", "no training frames");
   }
+  // In time order, stably. An order of indices, not of the views: GCC 12's
+  // std::stable_sort buffer ignores the over-alignment of Eigen members.
+  std::vector<std::size_t> order(given.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return given[a].time < given[b].time;
+  });
+  const auto views = [&](std::size_t i) -> const TrainingView& {
+    return given[order[i]];
+  };
   std::vector<Eigen::Vector3f> points;
   std::vector<RasterCamera> cameras;
-  for (const TrainingView& v : views) {
+  for (std::size_t i = 0; i < given.size(); ++i) {
+    const TrainingView& v = views(i);
     if (v.depth.empty()) {
       throw Error(v.name, "depth", "",
                   "no depth for this frame: run `pano4d depth` first");
@@ -88,7 +93,7 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
       }
   }
   const PanoramaFrame frame = MakePanoramaFrame(points, cameras);
-  const int count = std::min<int>(o.frames, static_cast<int>(views.size()));
+  const int count = std::min<int>(o.frames, static_cast<int>(given.size()));
   std::mt19937_64 rng(o.seed);
   PairsReport report;
   report.clips = o.clips;
@@ -99,8 +104,8 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
     const double direction =
         std::uniform_real_distribution<double>(0, 2 * M_PI)(rng);
     const int first = std::uniform_int_distribution<int>(
-        0, static_cast<int>(views.size()) - count)(rng);
-    const RasterCamera& reference = views[first].camera;
+        0, static_cast<int>(given.size()) - count)(rng);
+    const RasterCamera& reference = views(first).camera;
     const Eigen::Vector3d n = ViewingDirection(reference);
     const Eigen::Vector3d right =
         reference.rotation.row(0).transpose().cast<double>();
@@ -109,10 +114,10 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
     const Eigen::Vector3d d =
         std::cos(direction) * right + std::sin(direction) * up;
     const Eigen::Vector3d axis = RotationAxis(n, d);
-    const std::filesystem::path clip = out / ("clip_" + Index(k));
+    const std::filesystem::path clip = out / ("clip_" + ZeroPadded(k, 5));
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < count; ++i) {
-      const TrainingView& v = views[first + i];
+      const TrainingView& v = views(first + i);
       const double angle = o.elevation_degrees * kDegrees * i / (count - 1);
       const RasterCamera target =
           OrbitCamera(v.camera, frame.center, axis, angle);
@@ -121,10 +126,10 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
       const cv::Mat known = there.mask == 0;
       const WarpResult back =
           ForwardWarp(there.rgb, there.depth, target, v.camera, known);
-      WriteImage(clip / "cov" / (Index(i) + ".png"),
+      WriteImage(clip / "cov" / (ZeroPadded(i, 5) + ".png"),
                  Image::FromRgb32f(back.rgb.clone()));
-      WriteMask(clip / "mask" / (Index(i) + ".png"), back.mask);
-      WriteImage(clip / "src" / (Index(i) + ".png"),
+      WriteMask(clip / "mask" / (ZeroPadded(i, 5) + ".png"), back.mask);
+      WriteImage(clip / "src" / (ZeroPadded(i, 5) + ".png"),
                  Image::FromRgb32f(AsMat(v).clone()));
       mask_sum +=
           static_cast<double>(cv::countNonZero(back.mask)) / back.mask.total();

@@ -197,9 +197,7 @@ std::string FolderName(const std::string& name) {
 }
 
 std::string FrameName(std::size_t i) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%05zu.png", i);
-  return name;
+  return ZeroPadded(static_cast<std::int64_t>(i), 5) + ".png";
 }
 
 // Writes {in}: frames (holes black), masks, references and meta.json.
@@ -463,6 +461,13 @@ cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,
   cv::Mat out = warped.clone();
   filled.copyTo(out, mask);
   return out;
+}
+
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const std::filesystem::path& work_dir) {
+  if (command.empty()) return std::make_unique<GeometryPrior>();
+  return std::make_unique<CommandPrior>(command, work_dir,
+                                        std::make_unique<GeometryPrior>());
 }
 
 }  // namespace pano4d

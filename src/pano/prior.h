@@ -96,6 +96,12 @@ class CommandPrior : public Prior {
   std::unique_ptr<Prior> fallback_;
 };
 
+// The prior the expansion fills holes with: the external command when given
+// (its work folders under `work_dir`), falling back to the CPU geometry
+// prior when it fails; the CPU prior alone when `command` is empty.
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const std::filesystem::path& work_dir);
+
 // V_refined = M * filled + (1 - M) * warped, per frame (M: 255 = filled).
 cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,
                   const cv::Mat& mask);

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <random>
 
+#include "src/render/sh.h"
+
 namespace pano4d {
 
 RasterCamera BenchCamera(int width, int height) {
@@ -35,7 +37,7 @@ GaussianModel RandomViewFillingScene(std::size_t count,
     const float log_scale = std::log(sigma_px * z / camera.fx);
     for (int k = 0; k < 3; ++k) {
       m.log_scales[3 * i + k] = log_scale;
-      m.sh[3 * i + k] = (unit(rng) - 0.5f) / 0.28209479177387814f;
+      m.sh[3 * i + k] = (unit(rng) - 0.5f) / static_cast<float>(kShC0);
     }
     m.quats[4 * i] = 1;
     m.quats[4 * i + 1] = m.quats[4 * i + 2] = m.quats[4 * i + 3] = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "src/core/error.h"
+#include "src/render/sh.h"
 
 namespace pano4d {
 namespace {
@@ -115,7 +116,7 @@ PanoramaImage SplatPoints(const EquirectProjection& projection,
 PanoramaImage SplatGaussians(const EquirectProjection& projection,
                              const GaussianModel& model) {
   model.Check();
-  constexpr float kC0 = 0.28209479177387814f;  // degree-0 SH basis
+  const float c0 = static_cast<float>(kShC0);
   const int k_count = model.sh_coefficients();
   const double pixel_angle = 2 * M_PI / projection.width;
   std::vector<Eigen::Vector3f> points(model.size()), colors(model.size());
@@ -124,7 +125,7 @@ PanoramaImage SplatGaussians(const EquirectProjection& projection,
     points[i] = Eigen::Vector3f(model.means[3 * i], model.means[3 * i + 1],
                                 model.means[3 * i + 2]);
     for (int c = 0; c < 3; ++c) {
-      colors[i](c) = std::max(0.0f, kC0 * model.sh[i * k_count * 3 + c] + 0.5f);
+      colors[i](c) = std::max(0.0f, c0 * model.sh[i * k_count * 3 + c] + 0.5f);
     }
     const double sigma =
         std::exp(std::max({model.log_scales[3 * i], model.log_scales[3 * i + 1],

@@ -3,7 +3,6 @@
 namespace pano4d {
 namespace {
 
-constexpr double kC0 = 0.28209479177387814;
 constexpr double kC1 = 0.4886025119029199;
 constexpr double kC2[] = {1.0925484305920792, -1.0925484305920792,
                           0.31539156525252005, -1.0925484305920792,
@@ -17,7 +16,7 @@ constexpr double kC3[] = {-0.5900435899266435, 2.890611442640554,
 
 template <typename T>
 void ShBasis(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* b) {
-  b[0] = kC0;
+  b[0] = kShC0;
   if (degree < 1) return;
   const T x = dir.x(), y = dir.y(), z = dir.z();
   b[1] = -kC1 * y;

@@ -8,6 +8,10 @@ namespace pano4d {
 // (the constants and sign conventions of its reference implementation):
 // colour = max(0, sum_k basis_k(dir) * coeff_k + 0.5), per channel.
 
+// The degree-0 basis value: colour = kShC0 * dc + 0.5 for a degree-0
+// Gaussian (float code converts it: static_cast<float>(kShC0)).
+inline constexpr double kShC0 = 0.28209479177387814;
+
 // The K = (degree + 1)^2 basis values for a unit direction.
 template <typename T>
 void ShBasis(int degree, const Eigen::Matrix<T, 3, 1>& dir, T* basis);

@@ -10,8 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "evaluation/dycheck_dataset.h"
-#include "src/cli/stages.h"
+#include "src/datasets/dycheck_dataset.h"
 #include "src/core/camera.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
@@ -43,16 +42,6 @@ Result RunCli(std::vector<std::string> args) {
 
 int Lines(const std::string& s) {
   return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
-}
-
-// Depth the dataset gives is trusted more than depth pano4d estimated; a
-// frames.json from before the source was stored counts as estimated.
-TEST(CliTest, DepthWeightFollowsTheDepthSource) {
-  EXPECT_EQ(DefaultDepthWeight("dataset"), kGivenDepthWeight);
-  EXPECT_EQ(DefaultDepthWeight("stereo"), kEstimatedDepthWeight);
-  EXPECT_EQ(DefaultDepthWeight("external"), kEstimatedDepthWeight);
-  EXPECT_EQ(DefaultDepthWeight(""), kEstimatedDepthWeight);
-  EXPECT_GT(kGivenDepthWeight, kEstimatedDepthWeight);
 }
 
 TEST(CliTest, VersionAndHelp) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <numeric>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -140,9 +141,16 @@ void OrderLike(std::vector<T>& list, const std::vector<T>& reference,
                const GetId& id) {
   std::unordered_map<std::uint64_t, std::size_t> rank;
   for (std::size_t i = 0; i < reference.size(); ++i) rank[id(reference[i])] = i;
-  std::stable_sort(list.begin(), list.end(), [&](const T& a, const T& b) {
-    return rank.at(id(a)) < rank.at(id(b));
+  // Sorted by index: GCC 12's std::stable_sort buffer ignores the
+  // over-alignment of the Eigen members.
+  std::vector<std::size_t> order(list.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return rank.at(id(list[a])) < rank.at(id(list[b]));
   });
+  std::vector<T> sorted;
+  for (std::size_t i : order) sorted.push_back(list[i]);
+  list = std::move(sorted);
 }
 
 void OrderLike(ColmapModel& model, const ColmapModel& reference) {

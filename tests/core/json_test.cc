@@ -69,6 +69,29 @@ TEST(JsonTest, OptionalFieldsFallBackOnlyWhenAbsent) {
   EXPECT_THROW(GetJsonOr<int>(j, "n", 7, "opts.json"), Error);
 }
 
+// What resume checks use to name the option that changed.
+TEST(JsonTest, FirstDifferenceNamesTheKeyPath) {
+  const Json a = {{"seed", 0}, {"init", {{"num_bases", 20}, {"sh", 0}}}};
+  EXPECT_FALSE(FirstDifference(a, a));
+  Json b = a;
+  b["init"]["num_bases"] = 10;
+  b["seed"] = 3;  // "init" sorts before "seed": the first difference
+  const std::optional<JsonDifference> d = FirstDifference(a, b);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->path, "init.num_bases");
+  EXPECT_EQ(d->first, 20);
+  EXPECT_EQ(d->second, 10);
+  Json c = a;
+  c.erase("seed");
+  const std::optional<JsonDifference> missing = FirstDifference(a, c);
+  ASSERT_TRUE(missing);
+  EXPECT_EQ(missing->path, "seed");
+  EXPECT_TRUE(missing->second.is_null());
+  const std::optional<JsonDifference> whole = FirstDifference(Json(1), Json("1"));
+  ASSERT_TRUE(whole);
+  EXPECT_EQ(whole->path, "");
+}
+
 TEST(JsonTest, FileRoundTrip) {
   testing::TempDir dir;
   const Json value{{"psnr", 31.5}, {"lpips", nullptr}, {"frames", {1, 2, 3}}};

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "evaluation/synth_generate.h"
+#include "src/datasets/synth_generate.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "evaluation/dycheck_camera.h"
+#include "src/datasets/dycheck_camera.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
 #include "src/core/json.h"

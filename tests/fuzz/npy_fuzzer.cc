@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "evaluation/nvidia_dataset.h"
+#include "src/datasets/nvidia_dataset.h"
 #include "src/core/error.h"
 #include "src/core/npy.h"
 

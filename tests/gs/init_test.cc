@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "evaluation/synth_cameras.h"
+#include "src/datasets/synth_cameras.h"
 #include "src/render/rasterizer.h"
 #include "tests/support/synth_video.h"
 
@@ -118,7 +118,7 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   InitOptions options;
   options.dynamic_thickness = 0;
   InitReport report;
-  const GaussianScene scene = InitializeScene(views, kFrames, options, &report);
+  const GaussianScene scene = InitializeScene(views, kFrames, options, /*seed=*/0, &report);
   ASSERT_GT(scene.dynamics.size(), 0u);
   ASSERT_TRUE(scene.has_motion());
   EXPECT_EQ(scene.canonical_time, kFrames / 2);
@@ -153,7 +153,7 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   still.num_bases = 0;
   InitReport still_report;
   const GaussianScene static_scene =
-      InitializeScene(views, kFrames, still, &still_report);
+      InitializeScene(views, kFrames, still, /*seed=*/0, &still_report);
   EXPECT_EQ(static_scene.dynamics.size(), 0u);
   EXPECT_FALSE(static_scene.has_motion());
   EXPECT_GT(still_report.static_points_raw, report.static_points_raw);
@@ -234,9 +234,9 @@ TEST(InitTest, MovingObjectsStartSolidFromTheSide) {
   shell.dynamic_thickness = 0;
   InitReport shell_report, solid_report;
   const GaussianScene shell_scene =
-      InitializeScene(views, kFrames, shell, &shell_report);
+      InitializeScene(views, kFrames, shell, /*seed=*/0, &shell_report);
   const GaussianScene solid_scene =
-      InitializeScene(views, kFrames, InitOptions{}, &solid_report);
+      InitializeScene(views, kFrames, InitOptions{}, /*seed=*/0, &solid_report);
   EXPECT_GT(solid_report.dynamic_points_raw,
             2 * shell_report.dynamic_points_raw);
   EXPECT_EQ(solid_report.static_points_raw, shell_report.static_points_raw);

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "src/core/error.h"
+#include "src/core/image.h"
 
 namespace pano4d {
 namespace {
@@ -218,7 +219,7 @@ TEST(NormalFlatnessTest, MismatchedSizesAreRefused) {
 std::vector<std::uint8_t> LeftHalfMask() {
   std::vector<std::uint8_t> mask(kWidth * kHeight, 0);
   for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth / 2; ++x) mask[y * kWidth + x] = 1;
+    for (int x = 0; x < kWidth / 2; ++x) mask[y * kWidth + x] = kMaskOn;
   return mask;
 }
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/core/image.h"
 #include "src/core/file.h"
 #include "src/gs/surface_loss.h"
 #include "src/render/bench_scene.h"
@@ -87,7 +88,7 @@ double MeanLoss(Trainer* trainer, int steps) {
 TEST(TrainerTest, LossFallsOnAStaticScene) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.0f, 0.1f}, {0, 0, 0});
-  Trainer trainer(Perturbed(teacher, 1), views, FastOptions(400));
+  Trainer trainer(Perturbed(teacher, 1), views, FastOptions(400), /*seed=*/0);
   const double first = MeanLoss(&trainer, 20);
   while (!trainer.Done()) trainer.Step();
   const double last = MeanLoss(&trainer, 20);
@@ -119,7 +120,7 @@ TEST(TrainerTest, MotionBasesLearnAKnownTranslation) {
   // From the identity the bases must travel the whole way: a learning rate
   // ten times the default, which expects bases initialised from tracks.
   options.lr_basis_translation = 1.6e-3;
-  Trainer trainer(std::move(student), views, options);
+  Trainer trainer(std::move(student), views, options, /*seed=*/0);
   const double first = MeanLoss(&trainer, 8);
   while (!trainer.Done()) trainer.Step();
   const double last = MeanLoss(&trainer, 8);
@@ -136,7 +137,7 @@ TEST(TrainerTest, MotionBasesLearnAKnownTranslation) {
 TEST(TrainerTest, NonFiniteGradientIsSkippedLoggedAndTrainingGoesOn) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
-  Trainer trainer(Perturbed(teacher, 2), views, FastOptions(100));
+  Trainer trainer(Perturbed(teacher, 2), views, FastOptions(100), /*seed=*/0);
   int calls = 0;
   trainer.gradient_hook = [&](GaussianGradients* g) {
     if (++calls == 3) {
@@ -167,12 +168,12 @@ TEST(TrainerTest, CheckpointResumesBitForBit) {
   testing::TempDir dir;
   const auto path = dir.path() / "fit.ckpt";
 
-  Trainer straight(Perturbed(teacher, 3), views, options);
+  Trainer straight(Perturbed(teacher, 3), views, options, /*seed=*/0);
   for (int i = 0; i < 30; ++i) straight.Step();
   straight.SaveCheckpoint(path);
   while (!straight.Done()) straight.Step();
 
-  Trainer resumed(ReadCheckpointScene(path), views, options);
+  Trainer resumed(ReadCheckpointScene(path), views, options, /*seed=*/0);
   resumed.LoadCheckpoint(path);
   EXPECT_EQ(resumed.iteration(), 30);
   while (!resumed.Done()) resumed.Step();
@@ -188,10 +189,10 @@ TEST(TrainerTest, CheckpointOfOtherOptionsOrTruncatedIsRefused) {
   const auto views = RenderViews(teacher, {0.0f}, {0});
   testing::TempDir dir;
   const auto path = dir.path() / "fit.ckpt";
-  Trainer a(teacher, views, FastOptions(10));
+  Trainer a(teacher, views, FastOptions(10), /*seed=*/0);
   a.Step();
   a.SaveCheckpoint(path);
-  Trainer b(teacher, views, FastOptions(20));
+  Trainer b(teacher, views, FastOptions(20), /*seed=*/0);
   EXPECT_THROW(b.LoadCheckpoint(path), Error);
   const auto bytes = ReadFileBytes(path);
   {
@@ -216,7 +217,7 @@ TEST(TrainerTest, DensificationRespectsTheCap) {
   options.densify_gradient = 1e-7;  // everything qualifies
   options.prune_opacity = 0;
   options.max_gaussians = static_cast<std::int64_t>(teacher.size()) + 100;
-  Trainer trainer(Perturbed(teacher, 4), views, options);
+  Trainer trainer(Perturbed(teacher, 4), views, options, /*seed=*/0);
   while (!trainer.Done()) trainer.Step();
   EXPECT_LE(static_cast<std::int64_t>(trainer.scene().size()),
             options.max_gaussians);
@@ -234,7 +235,7 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   options.densify_from = 10;  // statistics must follow the added rows
   options.densify_every = 10;
   options.max_gaussians = static_cast<std::int64_t>(teacher.size()) + 50;
-  Trainer trainer(Perturbed(teacher, 5), views, options);
+  Trainer trainer(Perturbed(teacher, 5), views, options, /*seed=*/0);
   for (int i = 0; i < 5; ++i) trainer.Step();
   const GaussianModel extra = RandomViewFillingScene(80, CameraAt(0), 4.0f, 9);
   const std::size_t before = trainer.scene().statics.size();
@@ -249,7 +250,7 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   }
   for (float v : trainer.scene().statics.means) ASSERT_TRUE(std::isfinite(v));
   trainer.SaveCheckpoint(dir / "a.ckpt");
-  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options);
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options, /*seed=*/0);
   resumed.LoadCheckpoint(dir / "a.ckpt");
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   GaussianModel wrong_degree = extra;
@@ -282,13 +283,13 @@ TEST(TrainerTest, StaticScalesAreClampedToThePixelBound) {
 
   TrainerOptions options = FastOptions(3);
   options.max_static_scale_pixels = 4.0;
-  Trainer clamped(student, views, options);
+  Trainer clamped(student, views, options, /*seed=*/0);
   clamped.Step();
   for (float v : clamped.scene().statics.log_scales)
     ASSERT_LE(v, std::log(bound) + 1e-5f);
 
   options.max_static_scale_pixels = 0.0;
-  Trainer free(student, views, options);
+  Trainer free(student, views, options, /*seed=*/0);
   free.Step();
   EXPECT_GT(free.scene().statics.log_scales[0], std::log(0.9f));
 }
@@ -308,7 +309,7 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
   options.densify_from = 10;  // statistics must follow the removed rows
   options.densify_every = 10;
   options.densify_gradient = 1e-6;  // densify plenty
-  Trainer trainer(Perturbed(teacher, 5), views, options);
+  Trainer trainer(Perturbed(teacher, 5), views, options, /*seed=*/0);
   for (int i = 0; i < 5; ++i) trainer.Step();
   const GaussianModel statics = trainer.scene().statics;
   const GaussianModel dynamics = trainer.scene().dynamics;
@@ -331,7 +332,7 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
   }
   EXPECT_GT(trainer.densified_total(), 0);
   trainer.SaveCheckpoint(dir / "a.ckpt");
-  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options);
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options, /*seed=*/0);
   resumed.LoadCheckpoint(dir / "a.ckpt");
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   EXPECT_THROW(trainer.RemoveStaticGaussians(std::vector<std::uint8_t>(3, 1)),
@@ -341,12 +342,12 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
 TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {0.0f}, {0});
-  Trainer trainer(teacher, views, FastOptions(5));
+  Trainer trainer(teacher, views, FastOptions(5), /*seed=*/0);
   ExtraView extra;
   extra.camera = CameraAt(0.2f);
   extra.target.assign(kWidth * kHeight * 3, 1.0f);  // white
   extra.mask.assign(kWidth * kHeight, 0);
-  for (int p = 0; p < kWidth * kHeight / 2; ++p) extra.mask[p] = 1;
+  for (int p = 0; p < kWidth * kHeight / 2; ++p) extra.mask[p] = kMaskOn;
   extra.weight = 0.1;
   trainer.extra_view = [&](std::int64_t) { return &extra; };
   const StepReport r = trainer.Step();
@@ -366,11 +367,11 @@ TEST(TrainerTest, ExtraViewOutsideWeightAddsThePixelsOutsideTheMask) {
   extra.camera = CameraAt(0.2f);
   extra.target.assign(kWidth * kHeight * 3, 1.0f);  // white
   extra.mask.assign(kWidth * kHeight, 0);
-  for (int p = 0; p < kWidth * kHeight / 2; ++p) extra.mask[p] = 1;
+  for (int p = 0; p < kWidth * kHeight / 2; ++p) extra.mask[p] = kMaskOn;
   const auto first_step = [&](double outside) {
     ExtraView e = extra;
     e.outside_weight = outside;
-    Trainer trainer(teacher, views, FastOptions(5));
+    Trainer trainer(teacher, views, FastOptions(5), /*seed=*/0);
     trainer.extra_view = [&](std::int64_t) { return &e; };
     return trainer.Step().extra;
   };
@@ -396,8 +397,8 @@ TEST(TrainerTest, NormalFlatnessTermFlattensGaussiansAlongTheDepthNormals) {
   TrainerOptions off = FastOptions(150), on = FastOptions(150);
   off.normal_weight = 0;
   on.normal_weight = 1.0;
-  Trainer without(Perturbed(teacher, 3), views, off);
-  Trainer with(Perturbed(teacher, 3), views, on);
+  Trainer without(Perturbed(teacher, 3), views, off, /*seed=*/0);
+  Trainer with(Perturbed(teacher, 3), views, on, /*seed=*/0);
   const double start = across(with).loss;
   StepReport last_off, last_on;
   while (!with.Done()) {
@@ -444,7 +445,7 @@ TEST(TrainerTest, HiddenDepthTermBringsHiddenMovingGaussiansToTheSurface) {
   for (std::size_t v = 0; v < views.size(); ++v) {
     views[v].dynamic.assign(views[v].depth.size(), 0);
     for (std::size_t p = 0; p < views[v].depth.size(); ++p)
-      views[v].dynamic[p] = masks[v].depth[p] > 0;
+      views[v].dynamic[p] = masks[v].depth[p] > 0 ? kMaskOn : 0;
   }
 
   GaussianScene student = teacher;
@@ -475,8 +476,8 @@ TEST(TrainerTest, HiddenDepthTermBringsHiddenMovingGaussiansToTheSurface) {
   // Means move 30x faster than by default, so that 200 steps (the rate
   // decaying 100x) can carry them the 0.3 they must go.
   off.lr_mean = on.lr_mean = 5e-3;
-  Trainer without(student, views, off);
-  Trainer with(student, views, on);
+  Trainer without(student, views, off, /*seed=*/0);
+  Trainer with(student, views, on, /*seed=*/0);
   const HiddenDepth start = hidden_count(with);
   ASSERT_GE(start.hidden, 55);
   StepReport last_off, last_on;

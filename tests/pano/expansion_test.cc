@@ -64,7 +64,7 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false, bool moving = false,
       v.dynamic.assign(kWidth * kHeight, 0);
       for (int y = kMovingRect.y; y < kMovingRect.br().y; ++y)
         for (int x = kMovingRect.x; x < kMovingRect.br().x; ++x)
-          v.dynamic[y * kWidth + x] = 1;
+          v.dynamic[y * kWidth + x] = kMaskOn;
     }
     views.push_back(std::move(v));
   }
@@ -72,7 +72,8 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false, bool moving = false,
   o.iterations = 100;
   o.densify_from = 1000000;
   o.opacity_reset_every = 1000000;
-  return std::make_unique<Trainer>(std::move(scene), std::move(views), o);
+  return std::make_unique<Trainer>(std::move(scene), std::move(views), o,
+                                   /*seed=*/0);
 }
 
 ExpansionOptions SmallOptions() {
@@ -118,11 +119,24 @@ TEST(ExpansionScheduleTest, SpreadsTheStepsOverTheExpansions) {
   EXPECT_EQ(steps, 6);
 }
 
+// A fit resumed at iteration i continues after the last step before i: a
+// step due at i itself has not run (the checkpoint comes after the step).
+TEST(ExpansionScheduleTest, ResumeContinuesAfterTheLastStepBefore) {
+  ExpansionOptions o;  // steps 1-2 at 2000, 3 at 4000, 4-5 at 6000, 6 at 8000
+  EXPECT_EQ(LastStepBefore(o, 0, 10000), 0);
+  EXPECT_EQ(LastStepBefore(o, 2000, 10000), 0);
+  EXPECT_EQ(LastStepBefore(o, 2001, 10000), 2);
+  EXPECT_EQ(LastStepBefore(o, 4500, 10000), 3);
+  EXPECT_EQ(LastStepBefore(o, 10000, 10000), 6);
+  o.one_step = true;
+  EXPECT_EQ(LastStepBefore(o, 9000, 10000), 6);
+}
+
 TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   testing::TempDir dir;
   auto trainer = MakeTrainer();
   GeometryPrior prior;
-  Expansion expansion(SmallOptions(), dir.path(), &prior);
+  Expansion expansion(SmallOptions(), /*seed=*/0, dir.path(), &prior);
   const std::size_t before = trainer->scene().statics.size();
   const ExpansionStepReport r1 = expansion.RunStep(trainer.get(), 1);
   EXPECT_EQ(r1.views, 2 * 4);
@@ -170,11 +184,11 @@ TEST(ExpansionTest, ReloadServesTheSameViewsAsTheRunThatWroteThem) {
   testing::TempDir dir;
   auto trainer = MakeTrainer();
   GeometryPrior prior;
-  Expansion first(SmallOptions(), dir.path(), &prior);
+  Expansion first(SmallOptions(), /*seed=*/0, dir.path(), &prior);
   first.RunStep(trainer.get(), 1);
   first.RunStep(trainer.get(), 2);
 
-  Expansion resumed(SmallOptions(), dir.path(), &prior);
+  Expansion resumed(SmallOptions(), /*seed=*/0, dir.path(), &prior);
   resumed.Reload(*trainer, 2);
   ASSERT_EQ(resumed.refinement_views(), first.refinement_views());
   for (std::int64_t it : {1, 5, 17, 40}) {
@@ -188,7 +202,7 @@ TEST(ExpansionTest, ReloadServesTheSameViewsAsTheRunThatWroteThem) {
   }
   // Missing products are an error that says what to do.
   std::filesystem::remove_all(dir.path() / "step_01");
-  Expansion broken(SmallOptions(), dir.path(), &prior);
+  Expansion broken(SmallOptions(), /*seed=*/0, dir.path(), &prior);
   EXPECT_THROW(broken.Reload(*trainer, 2), Error);
 }
 
@@ -199,7 +213,7 @@ TEST(ExpansionTest, CarvingRemovesAFloaterOnlyAWarpSeesThrough) {
   testing::TempDir dir;
   auto trainer = MakeTrainer(/*surface=*/true);
   GeometryPrior prior;
-  Expansion expansion(SmallOptions(), dir.path(), &prior);
+  Expansion expansion(SmallOptions(), /*seed=*/0, dir.path(), &prior);
   EXPECT_EQ(expansion.Carve(trainer.get()), 0);  // nothing before a step
   const std::size_t before = trainer->scene().statics.size();
   const ExpansionStepReport r = expansion.RunStep(trainer.get(), 1);
@@ -256,7 +270,7 @@ TEST(ExpansionTest, WithoutGaussianRefinementNothingIsDistilled) {
   GeometryPrior prior;
   ExpansionOptions o = SmallOptions();
   o.gaussian_refinement = false;
-  Expansion expansion(o, dir.path(), &prior);
+  Expansion expansion(o, /*seed=*/0, dir.path(), &prior);
   const std::size_t before = trainer->scene().statics.size();
   const ExpansionStepReport r = expansion.RunStep(trainer.get(), 1);
   EXPECT_EQ(r.new_gaussians, 0);
@@ -308,7 +322,7 @@ TEST(ExpansionTest, StepTellsThePriorWhichPixelsMove) {
     testing::TempDir dir;
     auto trainer = MakeTrainer(/*surface=*/true, moving);
     RecordingPrior prior;
-    Expansion expansion(SmallOptions(), dir.path(), &prior);
+    Expansion expansion(SmallOptions(), /*seed=*/0, dir.path(), &prior);
     expansion.RunStep(trainer.get(), 1);
     ASSERT_EQ(prior.clips.size(), 2u);  // one per direction
     for (const PriorClip& clip : prior.clips) {
@@ -351,7 +365,7 @@ TEST(ExpansionTest, WarpDepthChoosesTheFramesOwnDepthOrTheRenderedOne) {
     RecordingPrior prior;
     ExpansionOptions o = SmallOptions();
     o.warp_depth = warp_depth;
-    Expansion expansion(o, dir.path(), &prior);
+    Expansion expansion(o, /*seed=*/0, dir.path(), &prior);
     expansion.RunStep(trainer.get(), 1);
     EXPECT_EQ(prior.clips.size(), 2u);
     return prior.clips;
@@ -379,7 +393,7 @@ TEST(ExpansionTest, PanoramaResultsComeFromTheFramesAndTheRefinedViews) {
   ConstantPrior prior;  // the steps fill magenta
   ExpansionOptions o = SmallOptions();
   o.gaussian_refinement = false;
-  Expansion expansion(o, dir.path(), &prior);
+  Expansion expansion(o, /*seed=*/0, dir.path(), &prior);
   EXPECT_THROW(
       expansion.PanoramicViews(trainer.get(), "early", {CameraAt(0)}, {0}),
       Error);
@@ -451,7 +465,8 @@ TEST(ExpansionTest, OptionsAreChecked) {
   o.refine_outside_weight = -0.5;
   EXPECT_THROW(o.Check(), Error);
   GeometryPrior prior;
-  EXPECT_THROW(Expansion(ExpansionOptions(), "/tmp/unused", nullptr), Error);
+  EXPECT_THROW(Expansion(ExpansionOptions(), /*seed=*/0, "/tmp/unused", nullptr),
+               Error);
 }
 
 }  // namespace

@@ -12,11 +12,12 @@
 #include <gtest/gtest.h>
 
 #include "src/core/camera.h"
+#include "src/render/sh.h"
 
 namespace pano4d {
 namespace {
 
-constexpr float kC0 = 0.28209479177387814f;
+constexpr float kC0 = static_cast<float>(kShC0);
 
 RasterCamera TestCamera() {
   RasterCamera c;

@@ -3,9 +3,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "evaluation/synth_cameras.h"
-#include "evaluation/synth_render.h"
-#include "evaluation/synth_scene.h"
+#include "src/datasets/synth_cameras.h"
+#include "src/datasets/synth_render.h"
+#include "src/datasets/synth_scene.h"
 #include "src/core/posed_camera.h"
 
 namespace pano4d::testing {

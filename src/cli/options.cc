@@ -1,0 +1,205 @@
+#include "src/cli/options.h"
+
+#include <CLI/CLI.hpp>
+
+namespace pano4d::cli {
+
+void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
+  app->add_option("--iterations", o->iterations, "Training iterations")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app->add_option("--max-gaussians", o->max_gaussians,
+                  "Densification stops adding Gaussians at this count")
+      ->capture_default_str();
+  app->add_option("--smoothness-weight", o->smoothness_weight,
+                  "Weight of the motion bases' acceleration penalty")
+      ->capture_default_str();
+  app->add_option("--normal-weight", o->normal_weight,
+                  "Weight of the depth-normal flatness term: Gaussians on a "
+                  "surface the depth maps show become discs in it (0: off)")
+      ->capture_default_str();
+  app->add_option("--hidden-weight", o->hidden_weight,
+                  "Weight of the hidden-depth term: a moving object's "
+                  "Gaussians may not hide deeper behind its visible surface "
+                  "than --hidden-thickness (0: off)")
+      ->capture_default_str();
+  app->add_option("--hidden-thickness", o->hidden_thickness,
+                  "Thickness of moving objects, relative to their depth, "
+                  "for the hidden-depth term")
+      ->capture_default_str();
+  app->add_option("--max-static-scale-pixels", o->max_static_scale_pixels,
+                  "Largest scale of a static Gaussian, in pixels at the "
+                  "median depth; clamped after every step (0: no clamp)")
+      ->capture_default_str();
+}
+
+void AddInitOptions(CLI::App* app, InitOptions* o) {
+  app->add_option("--num-bases", o->num_bases,
+                  "Motion bases K for dynamic content (0: every Gaussian "
+                  "static)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_flag(
+      "--no-motion", [o](std::int64_t) { o->num_bases = 0; },
+      "Fit every Gaussian as static (no motion bases: --num-bases 0)");
+  app->add_option("--dynamic-thickness", o->dynamic_thickness,
+                  "Moving objects start solid: each moving pixel of the "
+                  "canonical frame also seeds Gaussians behind it, out to "
+                  "this times the depth a round cross-section of its mask's "
+                  "local width has there (0: the visible surface only)")
+      ->capture_default_str();
+  app->add_option("--dynamic-layers", o->dynamic_layers,
+                  "Gaussians seeded behind each such pixel")
+      ->capture_default_str();
+  app->add_option("--sh-degree", o->sh_degree,
+                  "Spherical-harmonics degree of the colours (0-3)")
+      ->capture_default_str();
+}
+
+void AddExpansionOptions(CLI::App* app, ExpansionOptions* o) {
+  app->add_option("--directions", o->geometry.directions,
+                  "Expansion directions M")
+      ->capture_default_str();
+  app->add_option("--expansion-steps", o->geometry.steps, "Expansion steps E")
+      ->capture_default_str();
+  app->add_option("--alpha", o->geometry.alpha_degrees,
+                  "Angle per expansion step, degrees")
+      ->capture_default_str();
+  app->add_flag("--planar-expansion", o->geometry.planar,
+                "Ablation: translate cameras in the image plane instead of "
+                "orbiting them on the panorama");
+  app->add_option("--expand-every", o->every,
+                  "An expansion every N fit iterations; the steps are "
+                  "spread over them")
+      ->capture_default_str();
+  app->add_option("--expansion-stride", o->time_stride,
+                  "Expand every N-th training frame in time")
+      ->capture_default_str();
+  app->add_option("--refine-weight", o->refine_weight,
+                  "Weight of L_refine on the expanded views")
+      ->capture_default_str();
+  app->add_option("--refine-outside-weight", o->refine_outside_weight,
+                  "L_refine's weight on the warped pixels outside M_e, "
+                  "relative to those in it; 0: the paper's loss, masked to "
+                  "M_e (the Gaussians that fill M_e may then spread over "
+                  "the warped content)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--refine-every", o->refine_every,
+                  "L_refine on one expanded view every N iterations")
+      ->capture_default_str();
+  app->add_option("--carve-every", o->carve_every,
+                  "Every N iterations once an expansion step has run (and at "
+                  "every step), remove the static Gaussians in known empty "
+                  "space: seen through by a training frame, or seen by none "
+                  "and seen through by an expanded view's warp or by most "
+                  "expanded views; 0: only at the steps")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_flag("--one-step-expansion", o->one_step,
+                "Ablation: no progressive expansion, one step at the full "
+                "angle E x alpha");
+  app->add_flag(
+      "--no-gaussian-refinement",
+      [o](std::int64_t) { o->gaussian_refinement = false; },
+      "Ablation (panorama results only): expanded views are made and "
+      "written but not distilled into the Gaussians, which serve as geometry; "
+      "the validation views are warped from the training frames and the "
+      "refined expanded views, the rest filled by the prior");
+}
+
+void AddExpansionProductOptions(CLI::App* app, FitOptions* o) {
+  app->add_option_function<std::string>(
+         "--warp-depth",
+         [o](const std::string& v) {
+           o->warp_depth = v == "given" ? WarpDepth::kGiven
+                                        : WarpDepth::kRendered;
+         },
+         "The depth the source frames are warped with: given (each frame's "
+         "depth map, rendered depth where it has none) or rendered (from "
+         "the Gaussians, the paper's); default: given on depth the dataset "
+         "gives, rendered on estimated depth")
+      ->check(CLI::IsMember({"given", "rendered"}));
+  app->add_option("--prior-cmd", o->prior_cmd,
+                  "External video prior: a command with {in} and {out} "
+                  "(folders; see README). Without it, the CPU geometry prior. "
+                  "When the command fails, the CPU prior fills in and the log "
+                  "says why");
+  app->add_option("--panorama-width", o->panorama_width,
+                  "Width of the panoramas in WS/pano4d/panorama (height half)")
+      ->check(CLI::Range(2, 16384))
+      ->capture_default_str();
+}
+
+void AddNoExpansionFlag(CLI::App* app, bool* expand) {
+  app->add_flag(
+      "--no-expansion", [expand](std::int64_t) { *expand = false; },
+      "The same fit without panoramic expansion (the baseline of every "
+      "ablation)");
+}
+
+void AddFitOptions(CLI::App* app, FitOptions* o) {
+  app->add_option("--seed", o->seed, "Seed of every random choice")
+      ->capture_default_str();
+  AddTrainerOptions(app, &o->trainer);
+  app->add_option_function<double>(
+         "--depth-weight", [o](double w) { o->depth_weight = w; },
+         "Weight of the depth loss (default: 5 on depth the dataset gives, "
+         "1 on estimated depth: stereo or --depth-dir)")
+      ->check(CLI::NonNegativeNumber);
+  AddInitOptions(app, &o->init);
+  AddNoExpansionFlag(app, &o->expand);
+  AddExpansionOptions(app, &o->expansion);
+  AddExpansionProductOptions(app, o);
+  app->add_flag("--deterministic", o->deterministic,
+                "Guarantee that the result depends only on the inputs, "
+                "options and seed: no wall-clock decision (refuses "
+                "--time-budget). Results never depend on the thread count, "
+                "and a resumed run equals an uninterrupted one");
+  app->add_option("--checkpoint-every", o->checkpoint_every,
+                  "Write the checkpoint every N iterations (atomically)")
+      ->capture_default_str();
+  app->add_option("--validate-every", o->validate_every,
+                  "Validation PSNR/mPSNR/uPSNR into the run log every N "
+                  "iterations")
+      ->capture_default_str();
+  app->add_option("--log-every", o->log_every,
+                  "A run-log row (losses, Gaussians) every N iterations")
+      ->capture_default_str();
+  app->add_option("--time-budget", o->time_budget,
+                  "Stop after this many seconds of wall time (0: no limit)")
+      ->capture_default_str();
+}
+
+void AddFactorOption(CLI::App* app, int* factor) {
+  app->add_option("--factor", *factor,
+                  "Resolution divisor of a dataset's frames (DyCheck and "
+                  "Nvidia evaluate at 2)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+}
+
+void AddHoldoutOption(CLI::App* app, int* holdout) {
+  app->add_option("--holdout", *holdout,
+                  "Video or images: every N-th frame (i % N == 0) is held "
+                  "out for validation PSNR (0: none)")
+      ->capture_default_str();
+}
+
+void AddMaxSizeOption(CLI::App* app, int* max_size) {
+  app->add_option("--max-size", *max_size,
+                  "Video or images: resize the frames to this longest side "
+                  "in pixels before SfM (0: as they are)")
+      ->capture_default_str();
+}
+
+void AddPresetOption(CLI::App* app, std::string* preset) {
+  app->add_option("--preset", *preset,
+                  "Synthetic scene: tiny (128x96, 8 frames; tests), small "
+                  "(480x360, 48 frames; demo), medium (960x720, 120 frames; "
+                  "benchmarks)")
+      ->check(CLI::IsMember({"tiny", "small", "medium"}))
+      ->capture_default_str();
+}
+
+}  // namespace pano4d::cli

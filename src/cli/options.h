@@ -1,0 +1,59 @@
+#pragma once
+
+// The flags of the pipeline's options structs, each registered by one
+// function with one help text, shared by every command that exposes it
+// (`fit`, `run` and `demo` all call AddFitOptions). A flag maps onto one
+// field; its default is the field's, shown by --help.
+
+#include <filesystem>
+#include <string>
+
+#include "src/gs/init.h"
+#include "src/gs/trainer.h"
+#include "src/pano/expansion.h"
+#include "src/pipeline/fit_options.h"
+
+namespace CLI {
+class App;
+}
+
+namespace pano4d::cli {
+
+// --iterations, --max-gaussians and the loss weights (--smoothness-weight,
+// --normal-weight, --hidden-weight, --hidden-thickness,
+// --max-static-scale-pixels).
+void AddTrainerOptions(CLI::App* app, TrainerOptions* options);
+
+// --num-bases (--no-motion: 0), --dynamic-thickness, --dynamic-layers,
+// --sh-degree.
+void AddInitOptions(CLI::App* app, InitOptions* options);
+
+// The geometry (--directions, --expansion-steps, --alpha,
+// --planar-expansion), the schedule (--expand-every, --expansion-stride,
+// --refine-every, --carve-every), L_refine (--refine-weight,
+// --refine-outside-weight) and the ablations (--one-step-expansion,
+// --no-gaussian-refinement).
+void AddExpansionOptions(CLI::App* app, ExpansionOptions* options);
+
+// What the expansion's products take from the fit's options: --warp-depth,
+// --prior-cmd, --panorama-width.
+void AddExpansionProductOptions(CLI::App* app, FitOptions* options);
+
+// --no-expansion (FitOptions::expand = false).
+void AddNoExpansionFlag(CLI::App* app, bool* expand);
+
+// Everything a fit takes but --workspace and --resume: the above, --seed,
+// --depth-weight, --deterministic, --checkpoint-every, --validate-every,
+// --log-every, --time-budget.
+void AddFitOptions(CLI::App* app, FitOptions* options);
+
+// A dataset's resolution divisor (--factor).
+void AddFactorOption(CLI::App* app, int* factor);
+// Video or images: every N-th frame held out for validation (--holdout).
+void AddHoldoutOption(CLI::App* app, int* holdout);
+// Video or images: the longest side frames are resized to (--max-size).
+void AddMaxSizeOption(CLI::App* app, int* max_size);
+// The synthetic scene's preset (--preset tiny|small|medium).
+void AddPresetOption(CLI::App* app, std::string* preset);
+
+}  // namespace pano4d::cli

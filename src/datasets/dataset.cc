@@ -1,0 +1,79 @@
+#include "src/datasets/dataset.h"
+
+#include <map>
+
+#include "src/datasets/dycheck_dataset.h"
+#include "src/datasets/kubric_dataset.h"
+#include "src/datasets/nvidia_dataset.h"
+#include "src/core/error.h"
+#include "src/core/json.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+
+std::string_view ToString(DatasetKind kind) {
+  switch (kind) {
+    case DatasetKind::kDyCheck:
+      return "dycheck";
+    case DatasetKind::kNvidia:
+      return "nvidia";
+    case DatasetKind::kKubric4D:
+      return "kubric4d";
+  }
+  return "unknown";
+}
+
+namespace {
+
+Json SplitInfo(const std::vector<DatasetFrame>& frames) {
+  std::map<int, int> per_camera;
+  std::map<std::string, int> sizes;
+  int rgb = 0, depth = 0, covisible = 0;
+  for (const DatasetFrame& f : frames) {
+    ++per_camera[f.camera_id];
+    ++sizes[std::to_string(f.camera.camera.width) + "x" +
+            std::to_string(f.camera.camera.height)];
+    rgb += fs::exists(f.rgb) ? 1 : 0;
+    depth += f.depth.empty() ? 0 : 1;
+    covisible += f.covisible.empty() ? 0 : 1;
+  }
+  Json cameras = Json::object();
+  for (const auto& [camera, count] : per_camera)
+    cameras[std::to_string(camera)] = count;
+  Json image_sizes = Json::object();
+  for (const auto& [size, count] : sizes) image_sizes[size] = count;
+  return Json{{"frames", frames.size()},    {"frames_per_camera", cameras},
+              {"image_sizes", image_sizes}, {"rgb_present", rgb},
+              {"depth_present", depth},     {"covisible_present", covisible}};
+}
+
+}  // namespace
+
+Json DatasetInfo(const Dataset& dataset) {
+  Json info{{"kind", std::string(ToString(dataset.kind))},
+            {"root", dataset.root.string()},
+            {"factor", dataset.factor},
+            {"fps", dataset.fps},
+            {"num_times", dataset.num_times},
+            {"train", SplitInfo(dataset.train)},
+            {"val", SplitInfo(dataset.val)}};
+  info["near"] = dataset.near ? Json(*dataset.near) : Json(nullptr);
+  info["far"] = dataset.far ? Json(*dataset.far) : Json(nullptr);
+  return info;
+}
+
+Dataset LoadDataset(const fs::path& root, int factor) {
+  if (!fs::is_directory(root))
+    throw Error::In(root.string(), "is not a directory");
+  if (LooksLikeDyCheck(root)) return ReadDyCheck(root, factor);
+  if (LooksLikeNvidia(root)) return ReadNvidia(root, factor);
+  if (LooksLikeKubric4D(root)) return ReadKubric4D(root);
+  throw Error::In(root.string(),
+                  "not a dataset pano4d knows: expected the DyCheck iPhone "
+                  "layout (dataset.json, "
+                  "splits/, camera/), Nvidia Dynamic Scenes (poses_bounds.npy) "
+                  "or Kubric-4D "
+                  "(<scene>_p0_v<V>.json)");
+}
+
+}  // namespace pano4d

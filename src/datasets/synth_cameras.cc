@@ -1,0 +1,92 @@
+#include "src/datasets/synth_cameras.h"
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "src/core/error.h"
+
+namespace pano4d::synth {
+namespace {
+
+constexpr double kDegrees = M_PI / 180.0;
+constexpr double kTrainingRadius = 2.9;  // metres from the target, in plan
+constexpr double kTrainingHeight = 1.45;
+constexpr double kTrainingAzimuth = -90.0;  // the arc's middle, degrees
+constexpr double kTrainingSweep = 28.0;     // half the arc, degrees
+
+// A smooth, seeded sway: a sum of three sinusoids per axis.
+Eigen::Vector3d Sway(double s, double amplitude, std::mt19937& rng_seeded,
+                     std::uint32_t salt) {
+  std::mt19937 rng(rng_seeded() ^ salt);
+  std::uniform_real_distribution<double> phase(0, 2 * M_PI), freq(0.5, 2.5);
+  Eigen::Vector3d out = Eigen::Vector3d::Zero();
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int k = 0; k < 3; ++k) {
+      out(axis) += amplitude / (k + 1) *
+                   std::sin(2 * M_PI * freq(rng) * (k + 1) * s + phase(rng));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+PosedCamera LookAt(const Camera& intrinsics, const Eigen::Vector3d& eye,
+                   const Eigen::Vector3d& target) {
+  const Eigen::Vector3d forward = (target - eye).normalized();
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
+  if (!(right.norm() > 1e-9)) {
+    throw Error("synth camera", "target", "",
+                "cannot look straight up or down");
+  }
+  Eigen::Matrix3d world_from_cam;
+  world_from_cam.col(0) = right.normalized();
+  world_from_cam.col(2) = forward;
+  world_from_cam.col(1) = forward.cross(world_from_cam.col(0));  // down
+  const Eigen::Matrix3d cam_from_world = world_from_cam.transpose();
+  return PosedCamera{intrinsics,
+                     Rigid3d(Eigen::Quaterniond(cam_from_world).normalized(),
+                             -(cam_from_world * eye))};
+}
+
+std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
+                                            const Camera& intrinsics,
+                                            int frames, std::uint32_t seed) {
+  std::vector<PosedCamera> cameras;
+  cameras.reserve(frames);
+  for (int t = 0; t < frames; ++t) {
+    const double s = frames > 1 ? static_cast<double>(t) / (frames - 1) : 0.0;
+    // Each sway draws from its own generator seeded identically per frame,
+    // so the path is a smooth function of s.
+    std::mt19937 position_rng(seed * 31U + 7U), aim_rng(seed * 31U + 11U);
+    const double azimuth =
+        (kTrainingAzimuth + kTrainingSweep * (2 * s - 1)) * kDegrees;
+    Eigen::Vector3d eye(scene.target.x() + kTrainingRadius * std::cos(azimuth),
+                        scene.target.y() + kTrainingRadius * std::sin(azimuth),
+                        kTrainingHeight);
+    eye += Sway(s, 0.03, position_rng, 1);
+    const Eigen::Vector3d aim = scene.target + Sway(s, 0.06, aim_rng, 2);
+    cameras.push_back(LookAt(intrinsics, eye, aim));
+  }
+  return cameras;
+}
+
+PosedCamera ValidationCamera(const Scene& scene, const Camera& intrinsics,
+                             int index) {
+  if (index != 1 && index != 2) {
+    throw Error("synth camera", "index", std::to_string(index),
+                "validation cameras are 1 and 2");
+  }
+  constexpr double kOffset = 75.0;  // degrees from the training arc's middle
+  const double azimuth =
+      (kTrainingAzimuth + (index == 1 ? kOffset : -kOffset)) * kDegrees;
+  const double radius = 2.7;
+  const Eigen::Vector3d eye(scene.target.x() + radius * std::cos(azimuth),
+                            scene.target.y() + radius * std::sin(azimuth),
+                            index == 1 ? 1.15 : 1.85);
+  return LookAt(intrinsics, eye, scene.target);
+}
+
+}  // namespace pano4d::synth

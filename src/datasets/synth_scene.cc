@@ -1,0 +1,322 @@
+#include "src/datasets/synth_scene.h"
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+namespace pano4d::synth {
+namespace {
+
+// Hits closer than this along a ray are ignored: a ray starting on a
+// surface must not hit that surface again through rounding.
+constexpr double kMinHitDistance = 1e-6;
+// Below this bend angle the tube is straight (avoids L / beta at beta = 0).
+constexpr double kStraightBend = 1e-9;
+
+Eigen::Quaterniond Yaw(double angle) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
+}
+
+double Ease(double s) { return s * s * (3 - 2 * s); }
+
+Rigid3d Pose(const Part& part, double s) {
+  switch (part.motion) {
+    case MotionKind::kStatic:
+      return part.rest;
+    case MotionKind::kSlide: {
+      const double e = Ease(s);
+      return Rigid3d(Yaw(part.amplitude * e) * part.rest.rotation,
+                     part.from + (part.to - part.from) * e);
+    }
+    case MotionKind::kBounce: {
+      const Eigen::Vector3d path = part.to - part.from;
+      const double radius = part.half_size.x();
+      Eigen::Vector3d position = part.from + path * s;
+      position.z() +=
+          part.amplitude * std::abs(std::sin(M_PI * part.frequency * s));
+      // Rolls along its path: angle = distance / radius about z x path.
+      const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ().cross(path);
+      const double norm = axis.norm();
+      const Eigen::Quaterniond roll =
+          norm > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(
+                         path.norm() * s / radius, axis / norm))
+                   : Eigen::Quaterniond::Identity();
+      return Rigid3d(roll * part.rest.rotation, position);
+    }
+    case MotionKind::kBend: {
+      // The tube's centreline is a circular arc of length L in the tube
+      // frame's x-z plane, bent by beta(s); the part sits at arc length u L,
+      // turned with the arc's tangent.
+      const double beta =
+          part.amplitude * std::sin(2 * M_PI * part.frequency * s + part.phase);
+      const double a = beta * part.u;
+      const Eigen::Vector3d center =
+          std::abs(beta) < kStraightBend
+              ? Eigen::Vector3d(0, 0, part.length * part.u)
+              : Eigen::Vector3d(part.length / beta * (1 - std::cos(a)), 0,
+                                part.length / beta * std::sin(a));
+      const Eigen::Quaterniond turn(
+          Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()));
+      return Rigid3d(part.rest.rotation * turn,
+                     part.from + part.rest.rotation * center);
+    }
+  }
+  return part.rest;
+}
+
+Material RandomMaterial(std::mt19937& rng, const Eigen::Vector3d& hue,
+                        int pattern, double frequency) {
+  std::uniform_real_distribution<double> jitter(-0.08, 0.08);
+  Material m;
+  m.color_a = (hue + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)))
+                  .cwiseMax(0.05)
+                  .cwiseMin(0.95);
+  m.color_b = (0.45 * m.color_a +
+               Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)))
+                  .cwiseMax(0.02)
+                  .cwiseMin(0.9);
+  m.mark_color = 0.15 * m.color_b;
+  m.frequency = frequency;
+  m.mark_frequency =
+      4.0 + 4.0 * std::uniform_real_distribution<double>(0, 1)(rng);
+  m.mark_density =
+      0.3 + 0.2 * std::uniform_real_distribution<double>(0, 1)(rng);
+  m.pattern = pattern;
+  m.seed = static_cast<std::uint32_t>(rng());
+  return m;
+}
+
+bool IntersectSphere(double radius, const Eigen::Vector3d& o,
+                     const Eigen::Vector3d& d, double* t) {
+  const double b = o.dot(d);
+  const double c = o.squaredNorm() - radius * radius;
+  const double disc = b * b - c;
+  if (disc < 0) return false;
+  const double root = std::sqrt(disc);
+  double hit = -b - root;
+  if (hit <= kMinHitDistance)
+    hit = -b + root;  // inside the sphere: its far side
+  if (hit <= kMinHitDistance) return false;
+  *t = hit;
+  return true;
+}
+
+// Slab test. Outside a box: the entry; inside (the room): the exit.
+bool IntersectBox(const Eigen::Vector3d& half, bool inside,
+                  const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t,
+                  int* axis, int* face) {
+  double t_near = -std::numeric_limits<double>::infinity();
+  double t_far = std::numeric_limits<double>::infinity();
+  int near_axis = 0, far_axis = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double inv = 1.0 / d(a);
+    double t0 = (-half(a) - o(a)) * inv;
+    double t1 = (half(a) - o(a)) * inv;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) {
+      t_near = t0;
+      near_axis = a;
+    }
+    if (t1 < t_far) {
+      t_far = t1;
+      far_axis = a;
+    }
+  }
+  if (t_near > t_far) return false;
+  if (inside) {
+    if (t_far <= kMinHitDistance) return false;
+    *t = t_far;
+    *axis = far_axis;
+    *face = 2 * far_axis + (d(far_axis) > 0 ? 1 : 0);
+  } else {
+    if (t_near <= kMinHitDistance) return false;
+    *t = t_near;
+    *axis = near_axis;
+    *face = 2 * near_axis + (d(near_axis) > 0 ? 0 : 1);
+  }
+  return true;
+}
+
+}  // namespace
+
+Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
+  const double k = dynamic_scale;
+  std::mt19937 rng(seed * 2654435761U + 12345U);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto jitter = [&](double amount) {
+    return amount * (2 * unit(rng) - 1);
+  };
+
+  Scene scene;
+  scene.room_min = Eigen::Vector3d(-4, -3, 0);
+  scene.room_max = Eigen::Vector3d(4, 3, 3);
+  scene.target = Eigen::Vector3d(0.1, 0.8, 0.6);
+  scene.light_directions = {Eigen::Vector3d(0.4, -0.3, 0.85).normalized(),
+                            Eigen::Vector3d(-0.5, 0.6, 0.4).normalized()};
+  scene.light_intensities = {0.75, 0.35};
+  scene.ambient = 0.3;
+
+  // Room: floor, four walls, ceiling, each its own material.
+  const std::vector<std::pair<Eigen::Vector3d, int>> room_looks = {
+      {{0.75, 0.45, 0.35}, 2}, {{0.35, 0.55, 0.75}, 0}, {{0.8, 0.75, 0.5}, 1},
+      {{0.45, 0.7, 0.45}, 0},  {{0.6, 0.45, 0.3}, 1},   {{0.85, 0.85, 0.8}, 0}};
+  Part room;
+  room.shape = ShapeKind::kRoom;
+  room.half_size = (scene.room_max - scene.room_min) / 2;
+  room.rest = Rigid3d(Eigen::Quaterniond::Identity(),
+                      (scene.room_max + scene.room_min) / 2);
+  room.instance = 1;
+  room.material = static_cast<int>(scene.materials.size());
+  for (const auto& [hue, pattern] : room_looks) {
+    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 1.5));
+  }
+  scene.parts.push_back(room);
+
+  int next_instance = 2;
+  // Returns the new part's index (a reference would dangle on the next add).
+  const auto add = [&](ShapeKind shape, const Eigen::Vector3d& half,
+                       const Eigen::Vector3d& at, double yaw,
+                       const Eigen::Vector3d& hue, int pattern) {
+    Part part;
+    part.shape = shape;
+    part.half_size = half;
+    part.rest = Rigid3d(Yaw(yaw), at);
+    part.instance = next_instance++;
+    part.material = static_cast<int>(scene.materials.size());
+    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 4.0));
+    scene.parts.push_back(part);
+    return scene.parts.size() - 1;
+  };
+
+  // Static furniture.
+  add(ShapeKind::kBox, {0.55, 0.35, 0.37},
+      {-1.5 + jitter(0.15), 1.4 + jitter(0.15), 0.37}, 0.3 + jitter(0.2),
+      {0.55, 0.35, 0.2}, 1);
+  add(ShapeKind::kBox, {0.25, 0.25, 0.25},
+      {1.4 + jitter(0.15), 1.6 + jitter(0.15), 0.25}, jitter(0.5),
+      {0.8, 0.6, 0.3}, 2);
+  add(ShapeKind::kSphere, {0.3, 0.3, 0.3},
+      {-0.4 + jitter(0.1), 2.1 + jitter(0.1), 0.3}, 0, {0.3, 0.6, 0.8}, 0);
+  add(ShapeKind::kBox, {0.15, 0.15, 0.9},
+      {0.6 + jitter(0.1), 2.4 + jitter(0.1), 0.9}, jitter(0.3),
+      {0.7, 0.7, 0.72}, 1);
+
+  // Rigidly moving: a box sliding and turning, a ball bouncing and rolling.
+  Part& slider =
+      scene.parts[add(ShapeKind::kBox, Eigen::Vector3d::Constant(0.2 * k),
+                      {-0.9, 0.3, 0.2 * k}, 0.0, {0.85, 0.3, 0.3}, 2)];
+  slider.motion = MotionKind::kSlide;
+  slider.from = Eigen::Vector3d(-0.9 + jitter(0.1), 0.3 + jitter(0.1), 0.2 * k);
+  slider.to = Eigen::Vector3d(0.4 + jitter(0.1), 0.0 + jitter(0.1), 0.2 * k);
+  slider.amplitude = M_PI / 2;
+  Part& ball =
+      scene.parts[add(ShapeKind::kSphere, Eigen::Vector3d::Constant(0.18 * k),
+                      {0.9, 1.0, 0.18 * k}, 0, {0.9, 0.8, 0.2}, 0)];
+  ball.motion = MotionKind::kBounce;
+  ball.from = Eigen::Vector3d(1.0 + jitter(0.1), 1.0 + jitter(0.1), 0.18 * k);
+  ball.to = Eigen::Vector3d(0.1 + jitter(0.1), 0.6 + jitter(0.1), 0.18 * k);
+  ball.amplitude = 0.5;
+  ball.frequency = 2.0;
+
+  // Non-rigid: a tube bending back and forth, a chain of overlapping spheres
+  // along an arc whose curvature changes; the texture is painted in the
+  // straight pose (offset by arc length) and deforms with the bend.
+  constexpr int kTubeSpheres = 16;
+  const double length = 1.3 * k, base_radius = 0.11 * k;
+  const Eigen::Vector3d base(1.3 + jitter(0.1), 0.2 + jitter(0.1), 0.0);
+  const double tube_yaw = 0.6 + jitter(0.2);
+  const int tube_instance = next_instance++;
+  const int tube_material = static_cast<int>(scene.materials.size());
+  scene.materials.push_back(RandomMaterial(rng, {0.35, 0.75, 0.35}, 1, 5.0));
+  for (int i = 0; i < kTubeSpheres; ++i) {
+    Part part;
+    part.shape = ShapeKind::kSphere;
+    part.u = (i + 0.5) / kTubeSpheres;
+    const double radius = base_radius * (1.0 - 0.4 * part.u);
+    part.half_size = Eigen::Vector3d::Constant(radius);
+    part.instance = tube_instance;
+    part.material = tube_material;
+    part.texture_offset = Eigen::Vector3d(0, 0, length * part.u);
+    part.motion = MotionKind::kBend;
+    part.rest = Rigid3d(Yaw(tube_yaw), Eigen::Vector3d::Zero());
+    part.from = base;
+    part.length = length;
+    part.amplitude = 0.9;
+    part.frequency = 1.0;
+    part.phase = 0.4;
+    scene.parts.push_back(part);
+  }
+
+  for (Part& part : scene.parts) {
+    part.dynamic = !is_static && part.motion != MotionKind::kStatic;
+    if (is_static && part.motion != MotionKind::kStatic) {
+      // Frozen where it is a third of the way through the clip.
+      part.rest = Pose(part, 1.0 / 3.0);
+      part.motion = MotionKind::kStatic;
+    }
+  }
+  return scene;
+}
+
+PartPoses PosesAt(const Scene& scene, double s) {
+  PartPoses poses;
+  poses.world_from_part.reserve(scene.parts.size());
+  poses.part_from_world.reserve(scene.parts.size());
+  for (const Part& part : scene.parts) {
+    poses.world_from_part.push_back(Pose(part, s));
+    poses.part_from_world.push_back(poses.world_from_part.back().Inverse());
+  }
+  return poses;
+}
+
+Hit Intersect(const Scene& scene, const PartPoses& poses,
+              const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) {
+  Hit best;
+  for (std::size_t i = 0; i < scene.parts.size(); ++i) {
+    const Part& part = scene.parts[i];
+    const Rigid3d& to_part = poses.part_from_world[i];
+    const Eigen::Vector3d o = to_part * origin;
+    const Eigen::Vector3d d = to_part.rotation * direction;
+    double t = 0;
+    int axis = 0, face = 0;
+    Eigen::Vector3d normal_local;
+    if (part.shape == ShapeKind::kSphere) {
+      if (!IntersectSphere(part.half_size.x(), o, d, &t) || t >= best.distance)
+        continue;
+      normal_local = (o + t * d) / part.half_size.x();
+    } else {
+      const bool inside = part.shape == ShapeKind::kRoom;
+      if (!IntersectBox(part.half_size, inside, o, d, &t, &axis, &face) ||
+          t >= best.distance) {
+        continue;
+      }
+      normal_local = Eigen::Vector3d::Zero();
+      normal_local(axis) = d(axis) > 0 ? -1.0 : 1.0;
+    }
+    best.distance = t;
+    best.part = static_cast<int>(i);
+    best.face = face;
+    best.local = o + t * d;
+    best.normal = poses.world_from_part[i].rotation * normal_local;
+  }
+  if (best.valid() && best.normal.dot(direction) > 0)
+    best.normal = -best.normal;
+  return best;
+}
+
+Eigen::Vector3d Shade(const Scene& scene, const Hit& hit) {
+  const Part& part = scene.parts[hit.part];
+  const int material =
+      part.material + (part.shape == ShapeKind::kRoom ? hit.face : 0);
+  const Eigen::Vector3d albedo =
+      Albedo(scene.materials[material], hit.local + part.texture_offset);
+  double light = scene.ambient;
+  for (std::size_t k = 0; k < scene.light_directions.size(); ++k) {
+    light += scene.light_intensities[k] *
+             std::max(0.0, hit.normal.dot(scene.light_directions[k]));
+  }
+  return (albedo * light).cwiseMin(1.0);
+}
+
+}  // namespace pano4d::synth

@@ -1,0 +1,398 @@
+#include "src/pipeline/depth.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include <opencv2/imgproc.hpp>
+
+#include "colmap_ext/masks.h"
+#include "colmap_ext/model.h"
+#include "src/core/camera.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/progress.h"
+#include "src/datasets/dataset.h"
+#include "src/datasets/depth_map.h"
+#include "src/geometry/depth_alignment.h"
+#include "src/geometry/motion_segmentation.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+// Dynamic masks for frames that have none on disk: flow and epipolar
+// geometry over each camera's frames in time order (motion_segmentation.h).
+void ComputeMissingMasks(const fs::path& dir,
+                         std::vector<WorkspaceFrame>* frames) {
+  std::map<std::string, std::vector<WorkspaceFrame*>> by_camera;
+  for (WorkspaceFrame& f : *frames) {
+    if (!f.dynamic_mask.empty()) continue;
+    const std::string key = std::to_string(f.camera.camera.width) + "x" +
+                            std::to_string(f.camera.camera.height);
+    by_camera[key].push_back(&f);
+  }
+  for (auto& [key, list] : by_camera) {
+    std::stable_sort(list.begin(), list.end(),
+                     [](auto* a, auto* b) { return a->time < b->time; });
+    std::vector<cv::Mat> images;
+    std::vector<std::string> names;
+    for (WorkspaceFrame* f : list) {
+      images.push_back(ReadImage(f->rgb).mat());
+      names.push_back(f->name + ".png");
+    }
+    DynamicMaskStats stats;
+    const std::vector<cv::Mat> masks = ComputeDynamicMasks(images, {}, &stats);
+    WriteDynamicMasks(masks, names, dir);
+    for (std::size_t i = 0; i < list.size(); ++i)
+      list[i]->dynamic_mask = MaskPathFor(dir, names[i]);
+    PANO4D_LOG(kInfo) << "depth: dynamic masks " << stats.BriefReport();
+  }
+}
+
+// A dataset frame's name, time, pinhole camera and image.
+WorkspaceFrame FrameOf(const DatasetFrame& d) {
+  WorkspaceFrame f;
+  f.name = d.id;
+  f.time = d.time_id;
+  f.camera = d.camera;
+  f.camera.camera = AsPinhole(d.camera.camera, d.rgb.string());
+  f.rgb = d.rgb;
+  return f;
+}
+
+WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o) {
+  const Dataset ds = LoadDataset(o.dataset, o.factor);
+  WorkspaceFrames frames;
+  frames.source = "dataset " + fs::absolute(o.dataset).string();
+  frames.depth_source = kDepthFromDataset;
+  frames.dataset = fs::absolute(o.dataset);
+  frames.dataset_factor = ds.factor;
+  frames.num_times = ds.num_times;
+  ProgressBar bar("depth", static_cast<std::int64_t>(ds.train.size()));
+  std::int64_t missing_depth = 0;
+  for (const DatasetFrame& d : ds.train) {
+    WorkspaceFrame f = FrameOf(d);
+    if (!d.depth.empty()) {
+      f.depth = ws.depth_map(f.name);
+      WriteDepthMap(f.depth, ReadDepth(d));
+    } else {
+      ++missing_depth;
+    }
+    // The synthetic generator's ground-truth dynamic masks, when present.
+    const fs::path gt_mask = o.dataset / "dynamic" /
+                             (std::to_string(ds.factor) + "x") /
+                             (d.id + ".png");
+    if (fs::exists(gt_mask)) f.dynamic_mask = gt_mask;
+    frames.train.push_back(std::move(f));
+    bar.Add();
+  }
+  bar.Finish();
+  if (missing_depth > 0 && o.depth_dir.empty()) {
+    throw Error(o.dataset.string(), "depth",
+                std::to_string(missing_depth) + " frames",
+                "the dataset has no depth for them; pass --depth-dir with "
+                "depth maps from another tool (aligned to `pano4d sfm "
+                "--dataset` points)");
+  }
+  for (const DatasetFrame& d : ds.val) {
+    WorkspaceFrame f = FrameOf(d);
+    f.covisible = d.covisible;
+    frames.val.push_back(std::move(f));
+  }
+  return frames;
+}
+
+// The frames of `pano4d sfm`'s model (undistorted, pinhole), in name order;
+// every holdout-th one (LLFF's convention: i % holdout == 0) validates.
+WorkspaceFrames FramesFromWorkspace(const Workspace& ws, const DepthOptions& o,
+                                    ColmapModel* model) {
+  const fs::path sfm_json = ws.sfm_json();
+  if (!fs::exists(sfm_json)) {
+    throw Error(sfm_json.string(), "", "",
+                "missing; run `pano4d sfm` first, or pass --dataset");
+  }
+  const Json sfm = ReadJson(sfm_json);
+  const fs::path model_dir =
+      ws.root() / GetJson<std::string>(sfm, "model", sfm_json.string());
+  const fs::path images =
+      ws.root() / GetJson<std::string>(sfm, "images", sfm_json.string());
+  *model = ReadModel(model_dir);
+  std::vector<const ColmapImage*> sorted;
+  for (const ColmapImage& image : model->images) sorted.push_back(&image);
+  std::sort(sorted.begin(), sorted.end(),
+            [](auto* a, auto* b) { return a->name < b->name; });
+  WorkspaceFrames frames;
+  frames.source = "colmap " + fs::absolute(model_dir).string();
+  frames.num_times = static_cast<int>(sorted.size());
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    WorkspaceFrame f;
+    f.name = fs::path(sorted[i]->name).stem().string();
+    f.time = static_cast<int>(i);
+    f.camera = model->PosedCameraOf(*sorted[i], model_dir.string());
+    f.camera.camera = AsPinhole(f.camera.camera, model_dir.string());
+    f.rgb = images / sorted[i]->name;
+    const fs::path mask = MaskPathFor(ws.dynamic_masks(), sorted[i]->name);
+    if (fs::exists(mask)) {
+      const cv::Mat m = ReadMask(mask);
+      if (m.cols == f.camera.camera.width && m.rows == f.camera.camera.height)
+        f.dynamic_mask = mask;
+    }
+    const bool held_out = o.holdout > 0 && i % o.holdout == 0;
+    (held_out ? frames.val : frames.train).push_back(std::move(f));
+  }
+  return frames;
+}
+
+// The SfM points the frame's image observes: pixel and z-depth in its
+// camera (the model's image named <frame>.<ext>); none when it has none.
+std::vector<DepthSample> SfmSamples(const ColmapModel& model,
+                                    const WorkspaceFrame& f) {
+  std::vector<DepthSample> samples;
+  for (const ColmapImage& image : model.images) {
+    if (fs::path(image.name).stem().string() != f.name) continue;
+    for (const ColmapPoint2D& p : image.points2D) {
+      if (!p.HasPoint3D()) continue;
+      const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);
+      if (!point) continue;
+      const double z = (f.camera.cam_from_world * point->xyz).z();
+      if (z > 0) samples.push_back({p.xy, z});
+    }
+  }
+  return samples;
+}
+
+// External depth maps (one per frame named <name>.npy, .png, .tiff or
+// .exr, any resolution) brought onto the SfM points' scale with a robust
+// scale and shift per frame.
+void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
+                        const ColmapModel& model, WorkspaceFrames* frames) {
+  nlohmann::json report = nlohmann::json::array();
+  ProgressBar bar("depth", static_cast<std::int64_t>(frames->train.size()));
+  int failed = 0;
+  for (WorkspaceFrame& f : frames->train) {
+    fs::path file;
+    for (const char* ext : {".npy", ".png", ".tiff", ".tif", ".exr"}) {
+      if (fs::exists(o.depth_dir / (f.name + ext))) {
+        file = o.depth_dir / (f.name + ext);
+        break;
+      }
+    }
+    if (file.empty()) {
+      throw Error(o.depth_dir.string(), "frame", f.name,
+                  "no depth map named " + f.name +
+                      ".npy/.png/.tiff/.exr (one per frame is needed)");
+    }
+    cv::Mat depth = ReadDepthMap(file);
+    const int w = f.camera.camera.width, h = f.camera.camera.height;
+    if (depth.cols != w || depth.rows != h) {
+      cv::Mat resized;
+      // Nearest: interpolating across depth edges invents surfaces.
+      cv::resize(depth, resized, cv::Size(w, h), 0, 0, cv::INTER_NEAREST);
+      depth = resized;
+    }
+    try {
+      const DepthAlignment a = AlignDepth(depth, SfmSamples(model, f));
+      depth.forEach<float>([&](float& d, const int*) {
+        d = d > 0 ? std::max(0.0f, static_cast<float>(a.scale * d + a.shift))
+                  : 0.0f;
+      });
+      f.depth = ws.depth_map(f.name);
+      WriteDepthMap(f.depth, depth);
+      report.push_back({{"frame", f.name},
+                        {"scale", a.scale},
+                        {"shift", a.shift},
+                        {"samples", a.samples},
+                        {"inliers", a.inliers},
+                        {"median_relative_error", a.median_relative_error}});
+    } catch (const Error& e) {
+      ++failed;
+      PANO4D_LOG(kWarning) << "depth: frame " << f.name
+                           << " left without depth: " << e.what();
+    }
+    bar.Add();
+  }
+  bar.Finish();
+  WriteJson(ws.depth() / "alignment.json", report);
+  if (failed == static_cast<int>(frames->train.size())) {
+    throw Error(o.depth_dir.string(), "alignment", "0 frames",
+                "no depth map could be aligned to the SfM points (see the "
+                "warnings above)");
+  }
+}
+
+// Plane-sweep stereo depth for every training frame of a COLMAP workspace
+// (DESIGN.md "depth"): neighbours among the other training frames chosen by
+// baseline, the depth range from the frame's sparse points, moving pixels
+// removed (the object moved between the frames); the SfM points check the
+// result (scale and median relative error in stereo.json).
+void StereoDepth(const Workspace& ws, const DepthOptions& o,
+                 const ColmapModel& model, WorkspaceFrames* frames) {
+  const std::size_t n = frames->train.size();
+  std::vector<StereoRange> ranges(n);
+  std::vector<std::vector<DepthSample>> samples(n);
+  std::vector<double> all_depths;
+  std::vector<PosedCamera> cameras;
+  for (std::size_t i = 0; i < n; ++i) {
+    samples[i] = SfmSamples(model, frames->train[i]);
+    std::vector<double> z;
+    for (const DepthSample& sample : samples[i]) z.push_back(sample.z);
+    all_depths.insert(all_depths.end(), z.begin(), z.end());
+    ranges[i] = StereoRangeOf(std::move(z)).value_or(StereoRange{});
+    cameras.push_back(frames->train[i].camera);
+  }
+  const std::optional<StereoRange> scene = StereoRangeOf(all_depths);
+  if (!scene) {
+    throw Error(ws.root().string(), "sparse points",
+                std::to_string(all_depths.size()),
+                "too few SfM points to bound the stereo depth range");
+  }
+  // A frame that sees too few points sweeps the whole scene's range.
+  for (StereoRange& r : ranges)
+    if (!(r.median > 0)) r = *scene;
+
+  // Grey frames at the working size.
+  std::vector<StereoView> views(n);
+  std::vector<cv::Mat> dynamic(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const WorkspaceFrame& f = frames->train[i];
+    const Image image = ReadImage(f.rgb);
+    const int w = f.camera.camera.width, h = f.camera.camera.height;
+    const double s =
+        std::min(1.0, double(o.stereo_long_side) / std::max(w, h));
+    const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
+    const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
+    cv::Mat grey, small;
+    cv::cvtColor(image.mat(), grey, cv::COLOR_RGB2GRAY);
+    cv::resize(grey, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+    views[i].grey = small;
+    views[i].camera = f.camera;
+    views[i].camera.camera = f.camera.camera.Rescaled(sw, sh);
+    if (!f.dynamic_mask.empty()) dynamic[i] = ReadMask(f.dynamic_mask);
+  }
+
+  nlohmann::json report = nlohmann::json::array();
+  ProgressBar bar("stereo", static_cast<std::int64_t>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    WorkspaceFrame& f = frames->train[i];
+    std::vector<StereoView> neighbours;
+    for (std::size_t j :
+         SelectStereoNeighbours(cameras, i, ranges[i].median, o.neighbours))
+      neighbours.push_back(views[j]);
+    bar.Add();
+    if (neighbours.empty()) {
+      PANO4D_LOG(kWarning) << "depth: frame " << f.name
+                           << " has no stereo neighbour with enough baseline; "
+                              "left without depth";
+      continue;
+    }
+    const cv::Mat small = PlaneSweepDepth(views[i], neighbours, ranges[i].near,
+                                          ranges[i].far, o.sweep);
+    cv::Mat depth;
+    cv::resize(small, depth,
+               cv::Size(f.camera.camera.width, f.camera.camera.height), 0, 0,
+               cv::INTER_NEAREST);
+    if (!dynamic[i].empty()) depth.setTo(0.0f, dynamic[i] >= 128);
+    f.depth = ws.depth_map(f.name);
+    WriteDepthMap(f.depth, depth);
+    nlohmann::json entry = {
+        {"frame", f.name},
+        {"neighbours", neighbours.size()},
+        {"near", ranges[i].near},
+        {"far", ranges[i].far},
+        {"valid_fraction",
+         cv::countNonZero(depth) / static_cast<double>(depth.total())}};
+    try {
+      const DepthAlignment a = AlignDepth(depth, samples[i]);
+      entry["check_scale"] = a.scale;
+      entry["check_shift"] = a.shift;
+      entry["check_median_relative_error"] = a.median_relative_error;
+    } catch (const Error& e) {
+      entry["check"] = e.what();
+    }
+    report.push_back(entry);
+  }
+  bar.Finish();
+  WriteJson(ws.depth() / "stereo.json", report);
+}
+
+}  // namespace
+
+void DepthOptions::Check() const {
+  if (factor < 1) {
+    throw Error("--factor", "", std::to_string(factor), "must be >= 1");
+  }
+  if (holdout < 0 || holdout == 1) {
+    throw Error("--holdout", "", std::to_string(holdout),
+                "must be 0 (none) or at least 2");
+  }
+  if (stereo_long_side < 16) {
+    throw Error("depth options", "stereo_long_side",
+                std::to_string(stereo_long_side), "must be at least 16");
+  }
+  neighbours.Check();
+  sweep.Check();
+}
+
+nlohmann::json DepthOptions::ToJson() const {
+  return {{"dataset", dataset.string()},
+          {"depth_dir", depth_dir.string()},
+          {"factor", factor},
+          {"holdout", holdout},
+          {"stereo_long_side", stereo_long_side},
+          {"neighbours",
+           {{"neighbours", neighbours.neighbours},
+            {"baseline_ratio", neighbours.baseline_ratio},
+            {"min_baseline_ratio", neighbours.min_baseline_ratio},
+            {"max_angle_degrees", neighbours.max_angle_degrees}}},
+          {"sweep",
+           {{"planes", sweep.planes},
+            {"window", sweep.window},
+            {"min_correlation", sweep.min_correlation},
+            {"min_texture", sweep.min_texture}}}};
+}
+
+std::string DepthSummary::BriefReport() const {
+  char buffer[256];
+  std::snprintf(buffer, sizeof(buffer),
+                "%zu training frames (%d with depth), %zu validation frames, "
+                "%d times, depth from %s",
+                frames.train.size(), with_depth, frames.val.size(),
+                frames.num_times, frames.depth_source.c_str());
+  return buffer;
+}
+
+DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
+  o.Check();
+  EnsureDirectory(ws.depth());
+  DepthSummary summary;
+  WorkspaceFrames& frames = summary.frames;
+  if (!o.dataset.empty()) {
+    frames = FramesFromDataset(ws, o);
+    ComputeMissingMasks(ws.dynamic_masks(), &frames.train);
+  } else {
+    ColmapModel model;
+    frames = FramesFromWorkspace(ws, o, &model);
+    // Masks first: stereo leaves moving pixels without depth. The masks of
+    // `pano4d sfm` belong to the frames before undistortion; where the
+    // undistorted frames differ in size they are computed again on these.
+    ComputeMissingMasks(ws.undistorted_dynamic_masks(), &frames.train);
+    if (o.depth_dir.empty()) {
+      StereoDepth(ws, o, model, &frames);
+      frames.depth_source = kDepthFromStereo;
+    } else {
+      AlignExternalDepth(ws, o, model, &frames);
+      frames.depth_source = kDepthFromExternal;
+    }
+  }
+  frames.depth_options = o.ToJson();
+  WriteWorkspaceFrames(ws.root(), frames);
+  for (const WorkspaceFrame& f : frames.train) summary.with_depth += !f.depth.empty();
+  return summary;
+}
+
+}  // namespace pano4d

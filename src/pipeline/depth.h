@@ -1,0 +1,44 @@
+#pragma once
+
+// The depth stage: the frames every later stage works on
+// (WS/pano4d/frames.json), each with a z-depth map (WS/pano4d/depth/) and a
+// dynamic mask, from a dataset with known cameras or from the COLMAP
+// workspace of `pano4d sfm`. Depth comes, in that order of preference, from
+// the dataset, from another tool's maps aligned to the SfM points
+// (depth_dir), or from plane-sweep stereo on the COLMAP poses.
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/frames.h"
+#include "src/core/workspace.h"
+#include "src/geometry/stereo.h"
+#include "src/geometry/stereo_neighbours.h"
+
+namespace pano4d {
+
+struct DepthOptions {
+  std::filesystem::path dataset;    // empty: the workspace's COLMAP model
+  std::filesystem::path depth_dir;  // <frame>.npy/.png/.tiff/.exr; empty: none
+  int factor = 2;   // a dataset's resolution divisor (DyCheck evaluates at 2)
+  int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
+  // Stereo: frames are matched at most this many pixels on the long side
+  // (time; the fit's frames are usually smaller).
+  int stereo_long_side = 640;
+  StereoNeighbourOptions neighbours;
+  PlaneSweepOptions sweep;
+  void Check() const;  // throws pano4d::Error naming the option
+  nlohmann::json ToJson() const;
+};
+
+struct DepthSummary {
+  WorkspaceFrames frames;  // as written to frames.json
+  int with_depth = 0;      // training frames with a depth map
+  std::string BriefReport() const;
+};
+
+DepthSummary RunDepth(const Workspace& workspace, const DepthOptions& options);
+
+}  // namespace pano4d

@@ -1,0 +1,42 @@
+#pragma once
+
+// The eval stage: DyCheck's metrics of renders against a dataset split
+// (evaluation/evaluate.h), written beside the paper's numbers.
+
+#include <filesystem>
+#include <string>
+
+#include "evaluation/evaluate.h"
+#include "src/core/frames.h"
+#include "src/core/workspace.h"
+
+namespace pano4d {
+
+struct EvalOptions {
+  std::filesystem::path dataset;
+  std::filesystem::path renders;  // <id>.png per frame of the split
+  std::filesystem::path out;      // empty: <renders>/metrics
+  std::filesystem::path lpips_weights;  // empty: LPIPS reads n/a
+  std::string split = "val";
+  int factor = 2;  // the dataset's resolution divisor (DyCheck: 2)
+};
+
+struct EvalSummary {
+  EvaluationResult result;
+  std::filesystem::path out;  // metrics.json, metrics.md, per_frame.csv
+  std::string markdown;       // the table beside the paper's rows
+};
+
+EvalSummary RunEval(const EvalOptions& options);
+
+// Where the paper's numbers are (datasets_meta/): $PANO4D_DATASETS_META, or
+// the source tree's folder.
+std::filesystem::path DatasetsMetaDir();
+
+// The validation split of a workspace's frames as a dataset to score: the
+// dataset they came from (at their factor), or the workspace itself for
+// frames held out of a video.
+Dataset ValidationDataset(const Workspace& workspace,
+                          const WorkspaceFrames& frames);
+
+}  // namespace pano4d

@@ -1,0 +1,409 @@
+#include "src/pipeline/fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "evaluation/metrics.h"
+#include "evaluation/plot.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/median.h"
+#include "src/core/npy.h"
+#include "src/core/progress.h"
+#include "src/core/run_recorder.h"
+#include "src/core/timer.h"
+#include "src/pano/prior.h"
+#include "src/pano/trajectory_io.h"
+#include "src/pipeline/eval.h"
+#include "src/pipeline/expansion_outputs.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+// The rasterizer culls what is nearer than kNearPlane (world units); a
+// scene whose median depth is within this factor of it loses geometry (the
+// tiny scene scaled by 1e-3 in `pano4d bench stability` learns nothing).
+constexpr double kNearPlaneMargin = 100.0;
+
+void WarnIfNearThePlane(const std::vector<TrainingView>& views) {
+  std::vector<float> depths;
+  for (const TrainingView& v : views)
+    for (std::size_t i = 0; i < v.depth.size(); i += 97)
+      if (v.depth[i] > 0) depths.push_back(v.depth[i]);
+  if (depths.empty()) return;
+  const double median = UpperMedian(std::move(depths));
+  if (median < kNearPlaneMargin * kNearPlane) {
+    PANO4D_LOG(kWarning)
+        << "fit: the training depth's median is " << median
+        << " world units, within " << kNearPlaneMargin
+        << "x of the rasterizer's near plane " << kNearPlane
+        << ": Gaussians nearer than it are not drawn. Scale the scene up "
+           "(e.g. colmap model_transformer with a scale, then `pano4d depth` "
+           "again)";
+  }
+}
+
+std::vector<ValidationView> LoadValidation(
+    const std::vector<WorkspaceFrame>& frames) {
+  std::vector<ValidationView> views;
+  for (const WorkspaceFrame& f : frames) {
+    ValidationView v;
+    v.name = f.name;
+    v.time = f.time;
+    v.camera = RasterCamera::FromPosed(f.camera);
+    v.rgb = ReadImage(f.rgb);
+    if (v.rgb.width() != v.camera.width || v.rgb.height() != v.camera.height) {
+      throw Error(
+          f.rgb.string(), "size",
+          std::to_string(v.rgb.width()) + "x" + std::to_string(v.rgb.height()),
+          "differs from its camera");
+    }
+    if (!f.covisible.empty()) v.covisible = ReadMask(f.covisible);
+    views.push_back(std::move(v));
+  }
+  return views;
+}
+
+Image ToImage(const RenderOutput& out) {
+  cv::Mat mat(out.height, out.width, CV_32FC3);
+  std::copy(out.rgb.begin(), out.rgb.end(), mat.ptr<float>());
+  return Image::FromRgb32f(mat);
+}
+
+// Training-view PSNR over every training frame, quantised as the metrics.
+double TrainPsnr(Trainer* trainer) {
+  double sum = 0;
+  RenderOutput out;
+  for (const TrainingView& v : trainer->views()) {
+    trainer->Render(v.camera, v.time, &out);
+    const cv::Mat a = QuantizeForMetrics(ToImage(out), v.name);
+    cv::Mat target(v.camera.height, v.camera.width, CV_32FC3);
+    std::copy(v.rgb.begin(), v.rgb.end(), target.ptr<float>());
+    const cv::Mat b = QuantizeForMetrics(Image::FromRgb32f(target), v.name);
+    sum += Psnr(a, b).value_or(0.0);
+  }
+  return sum / static_cast<double>(trainer->views().size());
+}
+
+// The loss terms averaged over the iterations since the last log row.
+struct LossWindow {
+  double loss = 0, l1 = 0, depth = 0, psnr = 0;
+  int steps = 0;
+  void Add(const StepReport& r) {
+    loss += r.loss;
+    l1 += r.l1;
+    depth += r.depth;
+    psnr += r.psnr;
+    ++steps;
+  }
+};
+
+// The expansion inside the fit, with its prior and the step reports of
+// steps.json.
+struct ExpansionState {
+  std::unique_ptr<Prior> prior;
+  std::unique_ptr<Expansion> expansion;
+  nlohmann::json steps = nlohmann::json::array();
+};
+
+}  // namespace
+
+FitInputs LoadFitInputs(const Workspace& ws) {
+  FitInputs inputs;
+  WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
+  PANO4D_LOG(kInfo) << "fit: " << frames.train.size() << " training and "
+                    << frames.val.size() << " validation frames ("
+                    << frames.source << ")";
+  inputs.train = LoadTrainingViews(frames.train);
+  inputs.val = LoadValidation(frames.val);
+  inputs.num_times = frames.num_times;
+  inputs.depth_source = frames.depth_source;
+  inputs.frames = std::move(frames);
+  return inputs;
+}
+
+QuickMetrics Validate(Trainer* trainer,
+                      const std::vector<ValidationView>& val) {
+  QuickMetrics q;
+  double sums[3] = {0, 0, 0};
+  int counts[3] = {0, 0, 0};
+  RenderOutput out;
+  for (const ValidationView& v : val) {
+    trainer->Render(v.camera, v.time, &out);
+    const cv::Mat a = QuantizeForMetrics(ToImage(out), v.name);
+    const cv::Mat b = QuantizeForMetrics(v.rgb, v.name);
+    std::optional<double> values[3] = {Psnr(a, b), std::nullopt, std::nullopt};
+    if (!v.covisible.empty()) {
+      const cv::Mat m = MetricMask(v.covisible, v.name);
+      values[1] = Psnr(a, b, m);
+      values[2] = Psnr(a, b, InvertMask(m));
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (values[i] && std::isfinite(*values[i])) {
+        sums[i] += *values[i];
+        ++counts[i];
+      }
+    }
+  }
+  if (counts[0]) q.psnr = sums[0] / counts[0];
+  if (counts[1]) q.mpsnr = sums[1] / counts[1];
+  if (counts[2]) q.upsnr = sums[2] / counts[2];
+  return q;
+}
+
+std::unique_ptr<Trainer> MakeFitTrainer(GaussianScene scene,
+                                        std::vector<TrainingView> views,
+                                        const FitOptions& used) {
+  auto trainer = std::make_unique<Trainer>(std::move(scene), std::move(views),
+                                           used.trainer, used.seed);
+  trainer->SetFingerprint(ResumeFingerprint(used));
+  return trainer;
+}
+
+FitController::FitController(Workspace workspace, FitOptions options,
+                             FitInputs inputs)
+    : workspace_(std::move(workspace)),
+      given_(std::move(options)),
+      inputs_(std::move(inputs)) {}
+
+std::optional<std::string> CheckpointMismatch(const Workspace& ws,
+                                              const FitOptions& used) {
+  if (!fs::exists(ws.checkpoint())) return "no checkpoint";
+  const nlohmann::json saved = ReadCheckpointFingerprint(ws.checkpoint());
+  if (saved.is_null()) return "the checkpoint records no options";
+  if (const std::optional<JsonDifference> d =
+          FirstDifference(saved, ResumeFingerprint(used))) {
+    return "option " + d->path + " was " + JsonValueForMessage(d->first) +
+           ", now " + JsonValueForMessage(d->second);
+  }
+  return std::nullopt;
+}
+
+FitSummary FitController::Run() {
+  given_.Check();
+  const Workspace& ws = workspace_;
+  const FitOptions o = ResolveFitOptions(given_, inputs_.depth_source);
+  FitSummary summary;
+  summary.given = given_;
+  summary.used = o;
+  summary.depth_source = inputs_.depth_source;
+  summary.workspace = ws;
+  summary.train_frames = inputs_.train.size();
+  summary.val_frames = inputs_.val.size();
+  EnsureDirectory(ws.checkpoint().parent_path());
+  EnsureDirectory(ws.metrics());
+  Timer total;
+
+  PANO4D_LOG(kInfo) << "fit: depth weight " << o.trainer.depth_weight << " ("
+                    << (given_.depth_weight ? std::string("given")
+                        : inputs_.depth_source.empty()
+                            ? std::string(
+                                  "frames.json does not say where the depth "
+                                  "came from; `pano4d depth` again records it")
+                            : "depth from " + inputs_.depth_source)
+                    << ")";
+  WarnIfNearThePlane(inputs_.train);
+
+  const fs::path ckpt = ws.checkpoint();
+  const bool resuming = o.resume && fs::exists(ckpt);
+  if (o.resume && !resuming) {
+    PANO4D_LOG(kInfo) << "fit: no checkpoint at " << ckpt.string()
+                      << "; starting from the beginning";
+  }
+  Timer init_timer;
+  GaussianScene scene;
+  if (resuming) {
+    scene = ReadCheckpointScene(ckpt);
+  } else {
+    scene = InitializeScene(inputs_.train, inputs_.num_times, o.init, o.seed,
+                            &summary.init);
+    PANO4D_LOG(kInfo) << summary.init.Brief();
+  }
+  summary.seconds.init = init_timer.WallSeconds();
+  const std::unique_ptr<Trainer> owned =
+      MakeFitTrainer(std::move(scene), std::move(inputs_.train), o);
+  Trainer& trainer = *owned;
+  if (resuming) {
+    trainer.LoadCheckpoint(ckpt);
+    summary.resumed_at = trainer.iteration();
+    PANO4D_LOG(kInfo) << "fit: resumed from " << ckpt.string()
+                      << " at iteration " << summary.resumed_at;
+  }
+
+  // The expansion: on unless expand is false; a run too short for one says
+  // so.
+  ExpansionState ex;
+  const int iterations = o.trainer.iterations;
+  if (!o.expand) {
+    summary.no_expansion_reason = "--no-expansion";
+  } else {
+    PANO4D_LOG(kInfo) << "fit: expansion warps with "
+                      << WarpDepthName(o.expansion.warp_depth) << " depth";
+    if (iterations <= o.expansion.every) {
+      summary.no_expansion_reason = "run too short";
+      PANO4D_LOG(kInfo) << "fit: no expansion: " << iterations
+                        << " iterations leave no room for one every "
+                        << o.expansion.every << " (--expand-every)";
+    } else {
+      const fs::path dir = ws.expansion();
+      EnsureDirectory(dir);
+      ex.prior = MakePrior(o.prior_cmd, dir / "prior");
+      ex.expansion = std::make_unique<Expansion>(o.expansion, o.seed, dir,
+                                                 ex.prior.get());
+      if (resuming) {
+        const fs::path steps_path = dir / "steps.json";
+        const int last =
+            LastStepBefore(o.expansion, summary.resumed_at, iterations);
+        // Steps the interrupted run did after its checkpoint run again.
+        if (fs::exists(steps_path)) {
+          for (const auto& step : ReadJson(steps_path))
+            if (GetJson<int>(step, "step", steps_path.string()) <= last)
+              ex.steps.push_back(step);
+        }
+        ex.expansion->Reload(trainer, last);
+      }
+      trainer.extra_view = [e = ex.expansion.get()](std::int64_t it) {
+        return e->ViewFor(it);
+      };
+    }
+  }
+  summary.expanded = ex.expansion != nullptr;
+
+  const std::vector<ValidationView>& val = inputs_.val;
+  RunRecorder recorder(ws.fit_csv(), "fit",
+                       {"loss", "l1", "depth_loss", "train_psnr", "gaussians",
+                        "val_psnr", "val_mpsnr", "val_upsnr"},
+                       resuming && fs::exists(ws.fit_csv()));
+  ProgressBar bar("fit", iterations);
+  bar.Add(trainer.iteration());
+  LossWindow window;
+  while (!trainer.Done()) {
+    if (ex.expansion) {
+      for (int e : StepsDueAt(o.expansion, trainer.iteration(), iterations)) {
+        const ExpansionStepReport r = ex.expansion->RunStep(&trainer, e);
+        summary.seconds.expansion += r.seconds;
+        PANO4D_LOG(kInfo) << r.Brief();
+        ex.steps.push_back(r.ToJson());
+        WriteJson(ws.expansion() / "steps.json", ex.steps);
+      }
+    }
+    summary.last_step = trainer.Step();
+    if (ex.expansion && o.expansion.carve_every > 0 &&
+        trainer.iteration() % o.expansion.carve_every == 0) {
+      const Timer carve;
+      ex.expansion->Carve(&trainer);
+      summary.seconds.expansion += carve.WallSeconds();
+    }
+    window.Add(summary.last_step);
+    bar.Add();
+    const std::int64_t it = trainer.iteration();
+    const bool validate =
+        !val.empty() && (it % o.validate_every == 0 || trainer.Done());
+    if (it % o.log_every == 0 || validate || trainer.Done()) {
+      QuickMetrics q;
+      if (validate) {
+        Timer t;
+        q = Validate(&trainer, val);
+        summary.last_validation = q;
+        summary.seconds.validation += t.WallSeconds();
+      }
+      const double n = window.steps;
+      recorder.Record(it, {window.loss / n, window.l1 / n, window.depth / n,
+                           window.psnr / n,
+                           static_cast<double>(trainer.scene().size()), q.psnr,
+                           q.mpsnr, q.upsnr});
+      std::ostringstream status;
+      status.precision(4);
+      status << "loss " << window.loss / n << "  psnr " << window.psnr / n
+             << "  " << trainer.scene().size() << " G";
+      if (q.mpsnr) status << "  val m " << *q.mpsnr;
+      bar.SetStatus(status.str());
+      window = {};
+    }
+    if (it % o.checkpoint_every == 0 || trainer.Done())
+      trainer.SaveCheckpoint(ckpt);
+    if (trainer.Done()) break;
+    if (o.time_budget > 0 && total.WallSeconds() > o.time_budget) {
+      summary.termination = FitTermination::kTimeBudget;
+      trainer.SaveCheckpoint(ckpt);
+      PANO4D_LOG(kInfo) << "fit: time budget of " << o.time_budget
+                        << " s reached at iteration " << it;
+      break;
+    }
+    if (stop_.load()) {
+      summary.termination = FitTermination::kStopped;
+      trainer.SaveCheckpoint(ckpt);
+      PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it;
+      break;
+    }
+  }
+  bar.Finish();
+  if (ex.expansion && !ex.expansion->cameras().empty()) {
+    WriteTrajectories(ws.expansion(), ex.expansion->cameras(),
+                      SourceCamerasOf(trainer.views()));
+    WritePanoramas(ws.panorama(), trainer.scene(), ex.expansion->frame(),
+                   o.panorama_width, o.panorama_width / kPanoramaAspect);
+  }
+  summary.train_psnr = TrainPsnr(&trainer);
+
+  // Validation renders, scored with `pano4d eval`'s code. The ablation
+  // without Gaussian refinement scores the panorama results instead.
+  summary.panorama_only = ex.expansion &&
+                          !o.expansion.gaussian_refinement &&
+                          !ex.expansion->cameras().empty();
+  if (!val.empty()) {
+    RenderOutput out;
+    for (const ValidationView& v : val) {
+      trainer.Render(v.camera, v.time, &out);
+      WriteNpy(ws.val_depth_renders() / (v.name + ".npy"),
+               NpyArray::FromFloats({out.height, out.width}, out.depth));
+      if (!summary.panorama_only)
+        WriteImage(ws.val_renders() / (v.name + ".png"), ToImage(out));
+    }
+    if (summary.panorama_only)
+      WritePanoramaResults(&trainer, ex.expansion.get(), val,
+                           ws.val_renders());
+    if (inputs_.frames) {
+      summary.evaluation = EvaluateRenders(
+          ValidationDataset(ws, *inputs_.frames), ws.val_renders(), {});
+      WriteEvaluation(*summary.evaluation, ws.metrics(), DatasetsMetaDir());
+    }
+  }
+  try {
+    PlotRunLog(ws.fit_csv(), ws.fit_plot(),
+               {"train_psnr", "val_psnr", "val_mpsnr", "val_upsnr"},
+               "pano4d fit: PSNR (dB) against wall time");
+  } catch (const Error& e) {
+    PANO4D_LOG(kWarning) << "fit: no plot: " << e.what();
+  }
+
+  const GaussianScene& s = trainer.scene();
+  summary.iterations = trainer.iteration();
+  summary.static_gaussians = s.statics.size();
+  summary.dynamic_gaussians = s.dynamics.size();
+  summary.motion_bases = s.bases.num_bases;
+  summary.densified = trainer.densified_total();
+  summary.pruned = trainer.pruned_total();
+  summary.skipped_rows = trainer.skipped_rows_total();
+  summary.skipped_steps = trainer.skipped_steps_total();
+  summary.seconds.trainer = trainer.times();
+  if (ex.expansion) {
+    summary.expansion_steps = ex.steps;
+    summary.carved = ex.expansion->carved();
+    summary.refinement_views = ex.expansion->refinement_views();
+  }
+  summary.seconds.total = total.WallSeconds();
+  WriteJson(ws.fit_json(), summary.ToJson());
+  return summary;
+}
+
+FitSummary RunFit(const Workspace& workspace, const FitOptions& options) {
+  options.Check();
+  return FitController(workspace, options, LoadFitInputs(workspace)).Run();
+}
+
+}  // namespace pano4d

@@ -1,0 +1,94 @@
+#pragma once
+
+// The fit stage: the dynamic 4D Gaussians fitted to a workspace's frames,
+// with the expansion inside (src/pano), validation at intervals, the
+// error-against-run-time log, atomic checkpoints, resume and a time budget.
+// `pano4d fit`, `run`, `demo`, `bench budget` and `bench stability` all
+// train through FitController; `pano4d expand` makes its trainer with the
+// same options and function (MakeFitTrainer).
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "src/core/frames.h"
+#include "src/core/image.h"
+#include "src/core/workspace.h"
+#include "src/gs/trainer.h"
+#include "src/pipeline/fit_options.h"
+#include "src/pipeline/fit_summary.h"
+
+namespace pano4d {
+
+// A validation frame in memory: ground truth and, when the dataset has
+// one, its covisibility mask (0/255).
+struct ValidationView {
+  std::string name;
+  int time = 0;
+  RasterCamera camera;
+  Image rgb;
+  cv::Mat covisible;  // empty: none
+};
+
+// What a fit works on.
+struct FitInputs {
+  std::vector<TrainingView> train;
+  std::vector<ValidationView> val;
+  int num_times = 0;
+  std::string depth_source;  // a kDepthFrom*: chooses the used defaults
+  // frames.json, when the inputs came from it: the final validation renders
+  // are then scored with `pano4d eval`'s code against its dataset.
+  std::optional<WorkspaceFrames> frames;
+};
+
+// The inputs of WS/pano4d/frames.json. Throws pano4d::Error naming a
+// missing or mismatched file (and `pano4d depth` when frames.json is
+// missing).
+FitInputs LoadFitInputs(const Workspace& workspace);
+
+// The trainer of a fit with `used` options (ResolveFitOptions' result) on
+// `views`, starting from `scene`, its resume fingerprint set: the
+// controller's, and `pano4d expand`'s on a checkpoint's Gaussians.
+std::unique_ptr<Trainer> MakeFitTrainer(GaussianScene scene,
+                                        std::vector<TrainingView> views,
+                                        const FitOptions& used);
+
+// Renders `views` with `trainer` and scores them (QuickMetrics).
+QuickMetrics Validate(Trainer* trainer, const std::vector<ValidationView>& views);
+
+class FitController {
+ public:
+  // Fits `inputs` with `options` (as given; resolved by ResolveFitOptions
+  // against inputs.depth_source), writing into `workspace`.
+  FitController(Workspace workspace, FitOptions options, FitInputs inputs);
+
+  // Runs to the end, the time budget or Stop(), checkpointing on the way,
+  // and writes fit.json, the run log and its plot, the validation renders
+  // and metrics, and the expansion's products. Throws pano4d::Error on bad
+  // input or when a checkpoint to resume from does not match the options.
+  FitSummary Run();
+
+  // Asks a running Run() to checkpoint and return after the current
+  // iteration (termination kStopped). Safe from another thread or a signal
+  // handler.
+  void Stop() { stop_.store(true); }
+
+ private:
+  Workspace workspace_;
+  FitOptions given_;
+  FitInputs inputs_;
+  std::atomic<bool> stop_{false};
+};
+
+// LoadFitInputs and FitController::Run in one call.
+FitSummary RunFit(const Workspace& workspace, const FitOptions& options);
+
+// Whether WS/pano4d/checkpoints/fit.ckpt was written by a fit with these
+// (used) options: the reason it was not, or nothing when it was.
+std::optional<std::string> CheckpointMismatch(const Workspace& workspace,
+                                              const FitOptions& used);
+
+}  // namespace pano4d

@@ -1,0 +1,181 @@
+#include "src/pipeline/planner.h"
+
+#include <cstdio>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+namespace {
+
+std::string Percent(double fraction) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.2f%%", 100.0 * fraction);
+  return buffer;
+}
+
+StageDecision Sfm(const PlanFacts& f) {
+  if (!f.poses_given) {
+    return {"sfm", true, false,
+            "no poses: COLMAP estimates them from the frames (feature "
+            "extraction, matching, mapping, undistortion)"};
+  }
+  if (f.input == InputKind::kDataset && !f.depth_given) {
+    return {"sfm", true, false,
+            "poses given, but no depth: COLMAP triangulates sparse points "
+            "with the dataset's poses, to align the estimated depth to"};
+  }
+  return {"sfm", false, false,
+          f.input == InputKind::kColmap
+              ? "poses given: the COLMAP model in the workspace"
+              : "poses given: the dataset's cameras"};
+}
+
+StageDecision Depth(const PlanFacts& f) {
+  if (f.depth_given) {
+    return {"depth", false, false,
+            "depth given: the dataset's depth maps are used as they are (the "
+            "stage only lists the frames)"};
+  }
+  return {"depth", true, false,
+          "no depth: plane-sweep stereo on the COLMAP poses, aligned to the "
+          "sparse points"};
+}
+
+StageDecision Motion(const PlanFacts& f) {
+  if (f.no_motion) return {"motion", false, false, "left out by --no-motion"};
+  if (!f.dynamic_fraction) {
+    return {"motion", false, true,
+            "decided after depth, from the dynamic masks"};
+  }
+  const std::string share =
+      Percent(*f.dynamic_fraction) + " of the training pixels move";
+  if (*f.dynamic_fraction < kMinDynamicFraction) {
+    return {"motion", false, false,
+            "no dynamic content: " + share + " (below " +
+                Percent(kMinDynamicFraction) +
+                "); the Gaussians get no motion parameters"};
+  }
+  return {"motion", true, false, share + ": motion bases for them"};
+}
+
+StageDecision Expansion(const PlanFacts& f) {
+  if (f.no_expansion) {
+    return {"expansion", false, false, "left out by --no-expansion"};
+  }
+  if (f.target_views == 0) {
+    return {"expansion", true, false,
+            "no target views given: the targets are the expansion's own "
+            "panoramic trajectories, which leave the training coverage"};
+  }
+  const std::string views = std::to_string(f.target_views) + " target views";
+  if (!f.unseen_fraction) {
+    return {"expansion", true, false,
+            "the coverage of the " + views +
+                " is unknown (no covisibility masks), so expand"};
+  }
+  const std::string share =
+      Percent(*f.unseen_fraction) + " of the " + views + "' pixels";
+  if (*f.unseen_fraction < kMinUnseenFraction) {
+    return {"expansion", false, false,
+            "no target view outside the training coverage: " + share +
+                " unseen (below " + Percent(kMinUnseenFraction) + ")"};
+  }
+  return {"expansion", true, false,
+          share + " were never seen by a training frame"};
+}
+
+StageDecision Eval(const PlanFacts& f) {
+  if (!f.ground_truth) {
+    return {"eval", false, false,
+            "no ground truth: DyCheck metrics need a dataset's validation "
+            "frames (held-out frames of a video get PSNR in the fit)"};
+  }
+  if (!f.eval_requested) {
+    return {"eval", false, false,
+            "not asked for (--eval); the fit still reports validation PSNR"};
+  }
+  return {"eval", true, false,
+          "ground truth: DyCheck metrics (full, m* covisible, u* unseen) on "
+          "the validation frames"};
+}
+
+}  // namespace
+
+const char* InputKindName(InputKind kind) {
+  switch (kind) {
+    case InputKind::kVideo:
+      return "video";
+    case InputKind::kImages:
+      return "images";
+    case InputKind::kColmap:
+      return "colmap";
+    case InputKind::kDataset:
+      return "dataset";
+  }
+  return "unknown";
+}
+
+const StageDecision& Plan::Get(const std::string& stage) const {
+  for (const StageDecision& d : stages)
+    if (d.stage == stage) return d;
+  throw Error("plan", "stage", stage, "is not a stage of the plan");
+}
+
+nlohmann::json Plan::ToJson() const {
+  nlohmann::json s = nlohmann::json::array();
+  for (const StageDecision& d : stages) {
+    s.push_back({{"stage", d.stage},
+                 {"run", d.run},
+                 {"pending", d.pending},
+                 {"why", d.why}});
+  }
+  const auto optional = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json();
+  };
+  return {{"input",
+           {{"kind", InputKindName(facts.input)}, {"path", facts.input_path}}},
+          {"facts",
+           {{"poses_given", facts.poses_given},
+            {"depth_given", facts.depth_given},
+            {"dynamic_fraction", optional(facts.dynamic_fraction)},
+            {"target_views", facts.target_views},
+            {"unseen_fraction", optional(facts.unseen_fraction)},
+            {"ground_truth", facts.ground_truth},
+            {"eval_requested", facts.eval_requested},
+            {"no_expansion", facts.no_expansion},
+            {"no_motion", facts.no_motion}}},
+          {"stages", s}};
+}
+
+std::string Plan::Table() const {
+  std::ostringstream out;
+  out << "pano4d plan (" << InputKindName(facts.input) << " "
+      << facts.input_path << "):\n";
+  for (const StageDecision& d : stages) {
+    char head[40];
+    std::snprintf(head, sizeof(head), "  %-10s %-9s", d.stage.c_str(),
+                  d.pending ? "later"
+                  : d.run   ? "run"
+                            : "left out");
+    out << head << " " << d.why << "\n";
+  }
+  return out.str();
+}
+
+Plan MakePlan(const PlanFacts& facts) {
+  Plan plan;
+  plan.facts = facts;
+  plan.stages = {Sfm(facts),
+                 Depth(facts),
+                 Motion(facts),
+                 {"fit", true, false,
+                  "dynamic Gaussians from the frames, depth and masks"},
+                 Expansion(facts),
+                 Eval(facts)};
+  return plan;
+}
+
+}  // namespace pano4d

@@ -1,0 +1,166 @@
+#include "src/pipeline/render.h"
+
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/progress.h"
+#include "src/pano/trajectory_io.h"
+#include "src/pipeline/scene_outputs.h"
+#include "src/render/ply.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+std::string Format(const char* format, auto... args) {
+  char buffer[2048];
+  std::snprintf(buffer, sizeof(buffer), format, args...);
+  return buffer;
+}
+
+// The cameras of a named path about the fitted scene's centre.
+std::vector<TimedCamera> PathCameras(const FittedWorkspace& fitted,
+                                     const RenderOptions& o) {
+  const int num_times = fitted.scene.num_times;
+  VideoPathOptions v;
+  v.path = o.trajectory == "orbit"    ? VideoPath::kOrbit
+           : o.trajectory == "spiral" ? VideoPath::kSpiral
+                                      : VideoPath::kBullet;
+  v.degrees = o.degrees > 0                  ? o.degrees
+              : v.path == VideoPath::kOrbit  ? kOrbitDegrees
+              : v.path == VideoPath::kSpiral ? kSpiralDegrees
+                                             : kBulletDegrees;
+  v.frames = o.frames;
+  v.num_times = num_times;
+  v.time = o.time >= 0 ? o.time : num_times / 2;
+  if (v.time >= num_times) {
+    throw Error(
+        "--time", "", std::to_string(o.time),
+        "must be below the scene's " + std::to_string(num_times) + " times");
+  }
+  return VideoCameras(v, RasterCamera::FromPosed(fitted.MiddleFrame().camera),
+                      fitted.Center());
+}
+
+}  // namespace
+
+std::string RenderSummary::FullReport() const {
+  std::string s =
+      Format("pano4d render: %zu frames of %s in %s%s\n", frames, name.c_str(),
+             out.c_str(),
+             video.empty() ? "" : (", video " + video.string()).c_str());
+  for (const std::string& n : notes) s += "  not written: " + n + "\n";
+  return s;
+}
+
+RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
+  const FittedWorkspace fitted = LoadFittedWorkspace(ws);
+  const int num_times = fitted.scene.num_times;
+  std::vector<TimedCamera> cameras;
+  // Each camera as cameras.json will hold it; the cameras render from
+  // these, so that the file renders the same frames again.
+  std::vector<nlohmann::json> cameras_json;
+  RenderSummary summary;
+  summary.name = o.trajectory;
+  if (o.trajectory == "orbit" || o.trajectory == "spiral" ||
+      o.trajectory == "bullet") {
+    cameras = PathCameras(fitted, o);
+    for (TimedCamera& c : cameras) {
+      cameras_json.push_back(CameraToJson(c.camera));
+      c.camera = RasterCameraFromJson(cameras_json.back(), "render");
+    }
+  } else {
+    if (!fs::exists(o.trajectory)) {
+      throw Error("--trajectory", "", o.trajectory,
+                  "is neither orbit, spiral, bullet nor an existing camera "
+                  "file ({\"views\": [{\"camera\": {...}, \"t\": T}]})");
+    }
+    cameras = ReadCameraFile(o.trajectory, &cameras_json);
+    summary.name = fs::path(o.trajectory).stem().string();
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
+      if (o.time >= 0) cameras[i].time = o.time;
+      if (cameras[i].time < 0 || cameras[i].time >= num_times) {
+        throw Error(o.trajectory + " view " + std::to_string(i), "t",
+                    std::to_string(cameras[i].time),
+                    "must be in [0, " + std::to_string(num_times) + ")");
+      }
+    }
+  }
+  summary.out = o.out.empty() ? ws.renders(summary.name) : o.out;
+  EnsureDirectory(summary.out);
+  SceneRenderer renderer(fitted.scene);
+  ProgressBar bar("render " + summary.name,
+                  static_cast<std::int64_t>(cameras.size()));
+  std::vector<cv::Mat> frames;
+  nlohmann::json views = nlohmann::json::array();
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    frames.push_back(renderer.Render(cameras[i].camera, cameras[i].time));
+    WriteImage(summary.out / (ZeroPadded(static_cast<int>(i), 5) + ".png"),
+               Image::FromOpenCV(frames.back(), summary.name));
+    views.push_back({{"camera", cameras_json[i]}, {"t", cameras[i].time}});
+    bar.Add();
+  }
+  bar.Finish();
+  // The cameras in the camera-file layout, so that the path can be edited
+  // and rendered again with --trajectory FILE.
+  WriteJson(summary.out / "cameras.json", {{"views", views}});
+  const fs::path video = summary.out / (summary.name + ".mp4");
+  if (WriteVideo(video, frames, o.fps, &summary.notes)) summary.video = video;
+  summary.frames = frames.size();
+  return summary;
+}
+
+std::string ExportSummary::FullReport() const {
+  return Format(
+      "pano4d export: %d PLY file(s) (%zu Gaussians each%s) in %s\n"
+      "  cameras: %zu training and %zu expanded, as a COLMAP model in %s\n",
+      ply_files, gaussians,
+      motion ? ", one file per time step" : ", no motion",
+      (out / "ply").c_str(), training_cameras, expanded_cameras,
+      (out / "colmap").c_str());
+}
+
+ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
+  const FittedWorkspace fitted = LoadFittedWorkspace(ws);
+  ExportSummary summary;
+  summary.out = o.out.empty() ? ws.export_dir() : o.out;
+  const fs::path ply = summary.out / "ply";
+  EnsureDirectory(ply);
+  const GaussianScene& scene = fitted.scene;
+  GaussianModel posed;
+  summary.motion = scene.has_motion();
+  if (summary.motion) {
+    ProgressBar bar("export ply", scene.num_times);
+    for (int t = 0; t < scene.num_times; ++t) {
+      scene.ComposeAt(t, &posed);
+      WritePly(ply / ("t_" + ZeroPadded(t, 5) + ".ply"), posed);
+      ++summary.ply_files;
+      bar.Add();
+    }
+    bar.Finish();
+  } else {
+    // No motion: one scene holds for every time.
+    scene.ComposeAt(0, &posed);
+    WritePly(ply / "static.ply", posed);
+    summary.ply_files = 1;
+  }
+  summary.gaussians = posed.size();
+  std::vector<SourceCamera> sources;
+  for (const WorkspaceFrame& f : fitted.frames.train)
+    sources.push_back({f.name, RasterCamera::FromPosed(f.camera)});
+  const std::vector<ExpandedView> expanded =
+      fs::exists(ws.trajectories_json())
+          ? ReadTrajectories(ws.trajectories_json())
+          : std::vector<ExpandedView>{};
+  WriteTrajectories(summary.out, expanded, sources);
+  summary.training_cameras = sources.size();
+  summary.expanded_cameras = expanded.size();
+  return summary;
+}
+
+}  // namespace pano4d

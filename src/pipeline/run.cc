@@ -1,0 +1,294 @@
+#include "src/pipeline/run.h"
+
+#include <cstdio>
+#include <ostream>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "colmap_ext/model.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/frames.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/timer.h"
+#include "src/datasets/dataset.h"
+#include "src/pipeline/depth.h"
+#include "src/pipeline/eval.h"
+#include "src/pipeline/fit.h"
+#include "src/pipeline/sfm.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+// A covisibility mask marks a pixel seen by the training frames when it is
+// at least this bright (DyCheck writes 0 and 255).
+constexpr int kCovisibleLevel = 128;
+
+// The fraction of the validation pixels that no training frame saw, from
+// the dataset's covisibility masks (empty when a frame has none).
+std::optional<double> UnseenFraction(const Dataset& dataset) {
+  if (dataset.val.empty()) return std::nullopt;
+  double unseen = 0, total = 0;
+  for (const DatasetFrame& f : dataset.val) {
+    if (f.covisible.empty() || !fs::exists(f.covisible)) return std::nullopt;
+    const cv::Mat m = ReadMask(f.covisible);
+    unseen +=
+        static_cast<double>(m.total()) - cv::countNonZero(m >= kCovisibleLevel);
+    total += static_cast<double>(m.total());
+  }
+  return unseen / total;
+}
+
+// The fraction of training pixels the dynamic masks of frames.json mark as
+// moving (frames without a mask count as static).
+double DynamicFraction(const WorkspaceFrames& frames) {
+  double moving = 0, total = 0;
+  for (const WorkspaceFrame& f : frames.train) {
+    const double pixels =
+        static_cast<double>(f.camera.camera.width) * f.camera.camera.height;
+    total += pixels;
+    if (f.dynamic_mask.empty()) continue;
+    const cv::Mat m = ReadMask(f.dynamic_mask);
+    moving += cv::countNonZero(m);
+  }
+  return total > 0 ? moving / total : 0.0;
+}
+
+// A COLMAP workspace that `pano4d sfm` did not write: its model and images
+// are found (COLMAP's undistorted output first, since pano4d fits pinhole
+// cameras) and recorded in WS/pano4d/sfm.json for the later stages.
+void AdoptColmapWorkspace(const Workspace& ws) {
+  if (fs::exists(ws.sfm_json())) return;
+  const std::vector<std::pair<fs::path, fs::path>> layouts = {
+      {"dense/sparse", "dense/images"},
+      {"sparse/0", "images"},
+      {"sparse", "images"}};
+  for (const auto& [model, images] : layouts) {
+    if (DetectModelFormat(ws.root() / model) &&
+        fs::is_directory(ws.root() / images)) {
+      EnsureDirectory(ws.pano4d());
+      WriteJson(ws.sfm_json(), {{"model", model.string()},
+                                {"images", images.string()},
+                                {"source", "pano4d run --colmap"}});
+      return;
+    }
+  }
+  throw Error(ws.root().string(), "COLMAP model", "",
+              "no model with its images found (looked for dense/sparse with "
+              "dense/images, sparse/0 or sparse with images); run COLMAP's "
+              "mapper and image_undistorter, or `pano4d run --video`");
+}
+
+// Whether fit.json says a fit of `iterations` finished.
+bool FitComplete(const Workspace& ws, int iterations) {
+  if (!fs::exists(ws.fit_json())) return false;
+  const nlohmann::json j = ReadJson(ws.fit_json());
+  return j.value("iterations", 0) >= iterations &&
+         !j.value("stopped_by_time_budget", false);
+}
+
+// Whether frames.json was listed from this input: a dataset at the same
+// path and factor, or (video, images, COLMAP) any, since the depth stage
+// writes it last.
+bool FramesFromThisInput(const Workspace& ws, const RunOptions& o) {
+  if (!fs::exists(ws.frames_json())) return false;
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
+  if (o.dataset.empty()) return true;
+  return frames.dataset_factor == o.factor &&
+         fs::weakly_canonical(frames.dataset) ==
+             fs::weakly_canonical(o.dataset);
+}
+
+void WritePlan(const Workspace& ws, const RunOptions& o, const Plan& plan,
+               const nlohmann::json& results) {
+  nlohmann::json j = plan.ToJson();
+  j["options"] = o.ToJson();
+  j["results"] = results;
+  WriteJson(ws.plan_json(), j);
+}
+
+}  // namespace
+
+std::string RunSummary::BriefReport() const {
+  char buffer[1024];
+  std::snprintf(buffer, sizeof(buffer),
+                "done in %.1f s; the report is %s", seconds,
+                (report.dir / "index.md").c_str());
+  return buffer;
+}
+
+nlohmann::json RunOptions::ToJson() const {
+  return {{"video", video.string()},       {"images", images.string()},
+          {"colmap", colmap.string()},     {"dataset", dataset.string()},
+          {"workspace", workspace.string()}, {"eval", eval},
+          {"factor", factor},              {"holdout", holdout},
+          {"max_size", max_size},          {"fit", fit.ToJson()}};
+}
+
+PlanFacts GatherFacts(const RunOptions& o) {
+  PlanFacts f;
+  f.eval_requested = o.eval;
+  f.no_expansion = !o.fit.expand;
+  f.no_motion = o.fit.init.num_bases == 0;
+  if (!o.dataset.empty()) {
+    f.input = InputKind::kDataset;
+    f.input_path = o.dataset.string();
+    const Dataset d = LoadDataset(o.dataset, o.factor);
+    f.poses_given = true;
+    f.depth_given = !d.train.empty();
+    for (const DatasetFrame& frame : d.train)
+      f.depth_given = f.depth_given && !frame.depth.empty();
+    f.target_views = static_cast<int>(d.val.size());
+    f.ground_truth = !d.val.empty();
+    f.unseen_fraction = UnseenFraction(d);
+  } else if (!o.colmap.empty()) {
+    f.input = InputKind::kColmap;
+    f.input_path = o.colmap.string();
+    f.poses_given = true;
+  } else {
+    f.input = o.video.empty() ? InputKind::kImages : InputKind::kVideo;
+    f.input_path = (o.video.empty() ? o.images : o.video).string();
+  }
+  // A workspace that an earlier run took through depth already knows.
+  const Workspace ws(o.workspace);
+  if (fs::exists(ws.frames_json()))
+    f.dynamic_fraction = DynamicFraction(ReadWorkspaceFrames(ws.root()));
+  return f;
+}
+
+RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
+  const int inputs = !o.video.empty() + !o.images.empty() + !o.colmap.empty() +
+                     !o.dataset.empty();
+  if (inputs != 1) {
+    throw Error("pano4d run", "input", std::to_string(inputs) + " given",
+                "give exactly one of --video, --images, --colmap, --dataset");
+  }
+  const Workspace ws(o.workspace.empty() ? o.colmap : o.workspace);
+  if (ws.root().empty()) {
+    throw Error("--workspace", "", "",
+                "required (except with --colmap, whose folder is the "
+                "workspace)");
+  }
+  if (!o.colmap.empty() &&
+      fs::weakly_canonical(o.colmap) != fs::weakly_canonical(ws.root())) {
+    throw Error("--colmap", "", o.colmap.string(),
+                "the COLMAP workspace is the workspace: leave --workspace "
+                "out or give the same folder");
+  }
+  o.fit.Check();
+  EnsureDirectory(ws.pano4d());
+  if (!o.colmap.empty()) AdoptColmapWorkspace(ws);
+  RunOptions with_ws = o;
+  with_ws.workspace = ws.root();
+  PlanFacts facts = GatherFacts(with_ws);
+  Plan plan = MakePlan(facts);
+  if (progress) *progress << plan.Table() << std::flush;
+  if (!o.dataset.empty() && plan.Runs("depth")) {
+    throw Error(o.dataset.string(), "depth", "",
+                "the dataset has no depth for every training frame, and `run` "
+                "estimates depth only on its own COLMAP workspaces: run "
+                "`pano4d sfm --dataset D --workspace WS`, then `pano4d run "
+                "--colmap WS`");
+  }
+  RunSummary summary;
+  summary.stages = nlohmann::json::object();
+  WritePlan(ws, o, plan, summary.stages);
+  Timer total;
+
+  const auto stage = [&](const std::string& name, const auto& body) {
+    Timer t;
+    const std::string status = body();
+    summary.stages[name] = {{"status", status}, {"seconds", t.WallSeconds()}};
+    WritePlan(ws, o, plan, summary.stages);
+    PANO4D_LOG(kInfo) << "run: " << name << ": " << status << " ("
+                      << t.WallSeconds() << " s)";
+  };
+
+  if (plan.Runs("sfm")) {
+    stage("sfm", [&] {
+      SfmStageOptions s;
+      s.sfm.workspace = ws.root();
+      s.sfm.video = o.video;
+      s.sfm.images = o.images;
+      s.sfm.max_size = o.max_size;
+      s.dataset = o.dataset;
+      const SfmStageSummary r = RunSfmStage(s);
+      if (progress) *progress << r.FullReport();
+      return std::string("done");
+    });
+  }
+  stage("depth", [&] {
+    if (FramesFromThisInput(ws, o))
+      return std::string("complete from an earlier run");
+    DepthOptions d;
+    d.factor = o.factor;
+    d.holdout = o.holdout;
+    d.dataset = o.dataset;
+    const DepthSummary r = RunDepth(ws, d);
+    PANO4D_LOG(kInfo) << "depth: " << r.BriefReport();
+    return std::string(plan.Runs("depth") ? "estimated" : "listed");
+  });
+
+  // The dynamic masks exist now: the motion decision.
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
+  facts.dynamic_fraction = DynamicFraction(frames);
+  plan = MakePlan(facts);
+  PANO4D_LOG(kInfo) << "run: motion: " << plan.Get("motion").why;
+  WritePlan(ws, o, plan, summary.stages);
+
+  stage("fit", [&] {
+    FitOptions f = o.fit;
+    if (!plan.Runs("motion")) f.init.num_bases = 0;
+    if (!plan.Runs("expansion")) f.expand = false;
+    const std::optional<std::string> mismatch =
+        CheckpointMismatch(ws, ResolveFitOptions(f, frames.depth_source));
+    if (!mismatch && FitComplete(ws, f.trainer.iterations))
+      return std::string("complete from an earlier run");
+    if (mismatch && fs::exists(ws.checkpoint())) {
+      PANO4D_LOG(kInfo) << "run: fit: the workspace's fit had other options ("
+                        << *mismatch << "); fitting from the start";
+      // Its expansion products would otherwise be reported as this fit's.
+      fs::remove_all(ws.expansion());
+      fs::remove_all(ws.panorama());
+    }
+    f.resume = !mismatch;
+    const FitSummary r = RunFit(ws, f);
+    if (progress) *progress << r.FullReport() << std::flush;
+    return std::string("done");
+  });
+
+  if (plan.Runs("eval")) {
+    stage("eval", [&] {
+      EvalOptions e;
+      e.dataset = o.dataset;
+      e.renders = ws.val_renders();
+      e.out = ws.metrics();
+      e.factor = o.factor;
+      const EvalSummary r = RunEval(e);
+      if (progress) {
+        *progress << r.markdown << "\nwritten to " << r.out.string()
+                  << ": metrics.json, metrics.md, per_frame.csv\n";
+      }
+      return std::string("done");
+    });
+  }
+  summary.report = WriteReport(ws);
+  summary.plan = plan;
+  summary.seconds = total.WallSeconds();
+  if (progress) {
+    char line[1024];
+    std::snprintf(line, sizeof(line),
+                  "pano4d run: done in %.1f s; plan and stage times in %s, "
+                  "the report in %s\n",
+                  summary.seconds, ws.plan_json().c_str(),
+                  (summary.report.dir / "index.md").c_str());
+    *progress << line << std::flush;
+  }
+  return summary;
+}
+
+}  // namespace pano4d

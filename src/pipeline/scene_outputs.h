@@ -1,0 +1,55 @@
+#pragma once
+// What `render`, `export` and the report share: the fitted scene of a
+// workspace, rendering it to 8-bit images, and MP4 videos.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "src/core/frames.h"
+#include "src/core/workspace.h"
+#include "src/gs/scene.h"
+#include "src/pano/trajectory.h"
+#include "src/render/rasterizer.h"
+
+namespace pano4d {
+
+struct FittedWorkspace {
+  WorkspaceFrames frames;
+  GaussianScene scene;
+  // The training frame nearest the middle time: the reference of the
+  // novel-view paths.
+  const WorkspaceFrame& MiddleFrame() const;
+  // The panorama frame's centre (the centroid of the Gaussians).
+  Eigen::Vector3d Center() const;
+};
+
+// frames.json and the checkpoint of `pano4d fit`; throws pano4d::Error
+// naming the missing file and the command that makes it.
+FittedWorkspace LoadFittedWorkspace(const Workspace& workspace);
+
+// Renders the scene posed at `time` (checked against its times) as BGR8.
+class SceneRenderer {
+ public:
+  explicit SceneRenderer(const GaussianScene& scene) : scene_(scene) {}
+  cv::Mat Render(const RasterCamera& camera, int time);
+
+ private:
+  const GaussianScene& scene_;
+  Rasterizer rasterizer_;
+  GaussianModel posed_;
+  int posed_time_ = -1;
+  RenderOutput out_;
+};
+
+// An MP4 (OpenCV's FFmpeg backend, mp4v) written under a temporary name and
+// renamed when complete. Without a backend that opens, returns false and adds
+// a note saying so.
+bool WriteVideo(const std::filesystem::path& path,
+                const std::vector<cv::Mat>& frames, double fps,
+                std::vector<std::string>* notes);
+
+
+}  // namespace pano4d

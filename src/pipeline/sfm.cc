@@ -1,0 +1,121 @@
+#include "src/pipeline/sfm.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include "colmap_ext/model.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/datasets/dataset.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+std::string Format(const char* format, auto... args) {
+  char buffer[1024];
+  std::snprintf(buffer, sizeof(buffer), format, args...);
+  return buffer;
+}
+
+SfmComparison CompareWithDataset(const fs::path& model_dir,
+                                 const fs::path& root) {
+  const ColmapModel model = ReadModel(model_dir);
+  const Dataset dataset = LoadDataset(root);
+  std::vector<Rigid3d> estimate, reference;
+  // `pano4d sfm` names every frame <stem>.png.
+  for (const auto* split : {&dataset.train, &dataset.val}) {
+    for (const DatasetFrame& frame : *split) {
+      if (const ColmapImage* image = model.FindImageByName(frame.id + ".png")) {
+        estimate.push_back(image->CamFromWorld(model_dir.string()));
+        reference.push_back(frame.camera.cam_from_world);
+      }
+    }
+  }
+  if (estimate.size() < 3) {
+    throw Error(root.string(), "frames", std::to_string(estimate.size()),
+                "fewer than 3 registered images match a dataset frame id "
+                "(image names must be <frame id>.png, as `pano4d sfm "
+                "--images <dataset>/rgb/1x` writes them)");
+  }
+  SfmComparison c;
+  c.dataset = root;
+  c.errors = CompareTrajectories(estimate, reference);
+  std::vector<Eigen::Vector3d> points;
+  for (const ColmapPoint3D& p : model.points3D)
+    points.push_back(c.errors.reference_from_estimate * p.xyz);
+  c.scene_extent = RobustExtent(points);
+  return c;
+}
+
+}  // namespace
+
+std::string SfmComparison::BriefReport() const {
+  const TrajectoryErrors& e = errors;
+  const double extent = scene_extent;
+  return Format(
+      "against %s: %d cameras matched, Sim(3) scale %.4g\n"
+      "  ATE (camera centres): rmse %.4g, mean %.4g, median %.4g, max %.4g "
+      "(scene extent %.4g, the sparse points' middle-90%% box: rmse = "
+      "%.3f%%)\n"
+      "  RPE (consecutive): translation rmse %.4g, rotation rmse %.4g deg\n",
+      dataset.c_str(), e.cameras, e.reference_from_estimate.scale, e.ate_rmse,
+      e.ate_mean,
+      e.ate_median, e.ate_max, extent,
+      extent > 0 ? 100 * e.ate_rmse / extent : 0.0, e.rpe_translation_rmse,
+      e.rpe_rotation_rmse_deg);
+}
+
+std::string SfmStageSummary::FullReport() const {
+  const SfmReport& r = report;
+  std::string s = Format(
+      "pano4d sfm: %d of %d frames registered (%.1f%%), %d points, mean "
+      "reprojection error %.3f px, %d model(s)\n"
+      "  model: %s\n  images: %s\n",
+      r.registered, r.frames, 100.0 * r.registered / std::max(1, r.frames),
+      r.points3D, r.mean_reprojection_error, r.models, r.model.c_str(),
+      r.images.c_str());
+  for (const SfmStepReport& step : r.steps) {
+    s += Format("  %-20s %8.1f s%s\n", step.step.c_str(), step.seconds,
+                step.skipped ? "  (complete from an earlier run)" : "");
+  }
+  if (comparison) s += "  " + comparison->BriefReport();
+  return s;
+}
+
+SfmStageSummary RunSfmStage(const SfmStageOptions& options) {
+  SfmOptions sfm = options.sfm;
+  if (!options.dataset.empty()) {
+    // Known poses: the training frames at full resolution, named by id.
+    const Dataset dataset = LoadDataset(options.dataset, /*factor=*/1);
+    for (const DatasetFrame& frame : dataset.train)
+      sfm.known.push_back({frame.rgb, frame.id + ".png", frame.camera});
+  }
+  SfmStageSummary summary;
+  summary.report = RunSfm(sfm);
+  if (!options.compare_gt.empty()) {
+    summary.comparison =
+        CompareWithDataset(summary.report.model, options.compare_gt);
+    const TrajectoryErrors& e = summary.comparison->errors;
+    const double extent = summary.comparison->scene_extent;
+    const nlohmann::json j = {
+        {"dataset", fs::absolute(options.compare_gt).string()},
+        {"cameras", e.cameras},
+        {"scale", e.reference_from_estimate.scale},
+        {"ate_rmse", e.ate_rmse},
+        {"ate_mean", e.ate_mean},
+        {"ate_median", e.ate_median},
+        {"ate_max", e.ate_max},
+        {"scene_extent", extent},
+        {"ate_rmse_fraction_of_extent", extent > 0 ? e.ate_rmse / extent : 0.0},
+        {"rpe_translation_rmse", e.rpe_translation_rmse},
+        {"rpe_rotation_rmse_deg", e.rpe_rotation_rmse_deg}};
+    WriteFileAtomically(Workspace(sfm.workspace).sfm_ground_truth_json(),
+                        j.dump(2) + "\n");
+  }
+  return summary;
+}
+
+}  // namespace pano4d

@@ -1,0 +1,167 @@
+// The depth stage in process: a dataset's depth listed as it is, and
+// another tool's depth maps aligned to the SfM points of a COLMAP
+// workspace (here one built from the tiny synthetic scene's true cameras
+// and depth, so that the right answer is known).
+#include "src/pipeline/depth.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "colmap_ext/model.h"
+#include "src/core/error.h"
+#include "src/core/json.h"
+#include "src/datasets/dataset.h"
+#include "src/datasets/depth_map.h"
+#include "src/datasets/synth_generate.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+
+// The external tool's depth: affine in the truth (scale and shift unknown
+// to the stage), at half the frames' resolution.
+constexpr double kToolScale = 0.5, kToolShift = -0.2;
+
+class DepthStageTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    synth::SynthOptions s;
+    s.preset = "tiny";
+    synth::GenerateSynthScene(s, dir_->path() / "tiny");
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  // A COLMAP workspace of the dataset's training frames: their images,
+  // cameras and, as sparse points, every 8th pixel of their true depth
+  // (one image each); and the external tool's maps in WS/tool.
+  static Workspace ColmapWorkspace(const std::string& name) {
+    const Workspace ws(dir_->path() / name);
+    const Dataset d = LoadDataset(dir_->path() / "tiny", 2);
+    ColmapModel model;
+    std::uint64_t next_point = 1;
+    for (const DatasetFrame& f : d.train) {
+      const auto id = static_cast<std::uint32_t>(model.images.size() + 1);
+      model.cameras.push_back(FromCamera(id, f.camera.camera));
+      ColmapImage image;
+      image.image_id = id;
+      image.camera_id = id;
+      image.name = f.id + ".png";
+      image.SetCamFromWorld(f.camera.cam_from_world);
+      const cv::Mat depth = ReadDepth(f);
+      for (int y = 4; y < depth.rows; y += 8)
+        for (int x = 4; x < depth.cols; x += 8) {
+          const float z = depth.at<float>(y, x);
+          if (!(z > 0)) continue;
+          const Eigen::Vector2d pixel(x + 0.5, y + 0.5);
+          const Eigen::Vector3d ray = f.camera.camera.Unproject(pixel).ray;
+          ColmapPoint3D p;
+          p.point3D_id = next_point++;
+          p.xyz = f.camera.cam_from_world.Inverse() * (ray / ray.z() * z);
+          p.track.push_back(
+              {id, static_cast<std::uint32_t>(image.points2D.size())});
+          image.points2D.push_back({pixel, p.point3D_id});
+          model.points3D.push_back(p);
+        }
+      model.images.push_back(image);
+      fs::create_directories(ws.images());
+      fs::copy_file(f.rgb, ws.images() / image.name);
+      cv::Mat tool;
+      cv::resize(depth, tool, cv::Size(depth.cols / 2, depth.rows / 2), 0, 0,
+                 cv::INTER_NEAREST);
+      tool = tool * kToolScale + kToolShift;
+      WriteDepthMap(ws.root() / "tool" / (f.id + ".npy"), tool);
+    }
+    model.BuildIndex();
+    WriteModel(model, ws.sparse() / "0", ColmapFormat::kBinary);
+    WriteJson(ws.sfm_json(), {{"model", "sparse/0"}, {"images", "images"}});
+    return ws;
+  }
+
+  static testing::TempDir* dir_;
+};
+testing::TempDir* DepthStageTest::dir_ = nullptr;
+
+TEST_F(DepthStageTest, ADatasetsDepthIsListedAsItIs) {
+  const Workspace ws(dir_->path() / "listed");
+  DepthOptions o;
+  o.dataset = dir_->path() / "tiny";
+  const DepthSummary s = RunDepth(ws, o);
+  EXPECT_EQ(s.frames.depth_source, kDepthFromDataset);
+  EXPECT_EQ(s.with_depth, static_cast<int>(s.frames.train.size()));
+  EXPECT_EQ(s.frames.val.size(), 16u);
+  const WorkspaceFrames read = ReadWorkspaceFrames(ws.root());
+  ASSERT_EQ(read.train.size(), s.frames.train.size());
+  const WorkspaceFrame& f = read.train.front();
+  EXPECT_EQ(f.depth, ws.depth_map(f.name));
+  const cv::Mat depth = ReadDepthMap(f.depth);
+  EXPECT_EQ(depth.cols, f.camera.camera.width);
+  EXPECT_GT(cv::countNonZero(depth), depth.total() / 2);
+}
+
+// Scale and shift are found per frame from the SfM points; the maps are
+// brought to the frames' size; a missing map names the frame.
+TEST_F(DepthStageTest, ExternalDepthIsAlignedToTheSparsePoints) {
+  const Workspace ws = ColmapWorkspace("external");
+  DepthOptions o;
+  o.depth_dir = ws.root() / "tool";
+  o.holdout = 4;
+  const DepthSummary s = RunDepth(ws, o);
+  EXPECT_EQ(s.frames.depth_source, kDepthFromExternal);
+  EXPECT_EQ(s.frames.val.size(), 2u);  // frames 0 and 4 of 8
+  EXPECT_EQ(s.with_depth, 6);
+  const Json alignment = ReadJson(ws.depth() / "alignment.json");
+  ASSERT_EQ(alignment.size(), 6u);
+  for (const Json& a : alignment) {
+    EXPECT_NEAR(a.at("scale").get<double>(), 1 / kToolScale, 1e-3) << a;
+    EXPECT_NEAR(a.at("shift").get<double>(), -kToolShift / kToolScale, 1e-3)
+        << a;
+  }
+  // The aligned map of a frame against its true depth, where both have it.
+  const Dataset d = LoadDataset(dir_->path() / "tiny", 2);
+  const WorkspaceFrame& f = s.frames.train.front();
+  const DatasetFrame* truth = nullptr;
+  for (const DatasetFrame& t : d.train)
+    if (t.id == f.name) truth = &t;
+  ASSERT_NE(truth, nullptr);
+  const cv::Mat aligned = ReadDepthMap(f.depth), z = ReadDepth(*truth);
+  ASSERT_EQ(aligned.size(), z.size());
+  std::vector<double> relative;
+  for (int y = 0; y < z.rows; ++y)
+    for (int x = 0; x < z.cols; ++x) {
+      const float a = aligned.at<float>(y, x), b = z.at<float>(y, x);
+      if (a > 0 && b > 0) relative.push_back(std::abs(a - b) / b);
+    }
+  ASSERT_GT(relative.size(), z.total() / 2);
+  // The half-resolution map upsampled (nearest) is off by its slope over a
+  // pixel; a wrong scale or shift would be off everywhere.
+  std::nth_element(relative.begin(), relative.begin() + relative.size() / 2,
+                   relative.end());
+  EXPECT_LT(relative[relative.size() / 2], 0.01);
+
+  fs::remove(ws.root() / "tool" / (f.name + ".npy"));
+  try {
+    RunDepth(ws, o);
+    FAIL() << "a frame without a depth map was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.value(), f.name);
+  }
+}
+
+TEST_F(DepthStageTest, BadOptionsAreRefusedBeforeAnyWork) {
+  DepthOptions o;
+  o.holdout = 1;
+  EXPECT_THROW(RunDepth(Workspace(dir_->path() / "bad"), o), Error);
+  EXPECT_FALSE(fs::exists(dir_->path() / "bad"));
+  o.holdout = 0;
+  EXPECT_THROW(RunDepth(Workspace(dir_->path() / "bad"), o), Error);  // no sfm.json
+}
+
+}  // namespace
+}  // namespace pano4d

@@ -1,0 +1,100 @@
+#include "src/pipeline/fit_options.h"
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+#include "src/core/frames.h"
+#include "src/core/json.h"
+
+namespace pano4d {
+namespace {
+
+// Depth the dataset gives is trusted more than depth pano4d estimated, and
+// warped with; a frames.json from before the source was stored counts as
+// estimated. A value given is used as it is.
+TEST(FitOptionsTest, InputDependentDefaultsFollowTheDepthSource) {
+  const FitOptions given;
+  const FitOptions dataset = ResolveFitOptions(given, kDepthFromDataset);
+  EXPECT_EQ(dataset.trainer.depth_weight, kGivenDepthWeight);
+  EXPECT_EQ(dataset.expansion.warp_depth, WarpDepth::kGiven);
+  for (const char* estimated : {kDepthFromStereo, kDepthFromExternal, ""}) {
+    const FitOptions used = ResolveFitOptions(given, estimated);
+    EXPECT_EQ(used.trainer.depth_weight, kEstimatedDepthWeight) << estimated;
+    EXPECT_EQ(used.expansion.warp_depth, WarpDepth::kRendered) << estimated;
+  }
+  EXPECT_GT(kGivenDepthWeight, kEstimatedDepthWeight);
+  FitOptions set;
+  set.depth_weight = 2.5;
+  set.warp_depth = WarpDepth::kRendered;
+  const FitOptions used = ResolveFitOptions(set, kDepthFromDataset);
+  EXPECT_EQ(used.trainer.depth_weight, 2.5);
+  EXPECT_EQ(used.expansion.warp_depth, WarpDepth::kRendered);
+  // Given and used, as fit.json records them.
+  EXPECT_TRUE(given.ToJson().at("depth_weight").is_null());
+  EXPECT_TRUE(given.ToJson().at("warp_depth").is_null());
+  EXPECT_EQ(dataset.ToJson().at("depth_weight"), kGivenDepthWeight);
+  EXPECT_EQ(dataset.ToJson().at("warp_depth"), "given");
+}
+
+// Every option of every struct is in the JSON, once.
+TEST(FitOptionsTest, ToJsonHoldsEveryStruct) {
+  const nlohmann::json j = FitOptions{}.ToJson();
+  for (const char* key :
+       {"seed", "trainer", "init", "expand", "expansion", "prior_cmd",
+        "panorama_width", "depth_weight", "warp_depth", "resume",
+        "deterministic", "checkpoint_every", "validate_every", "log_every",
+        "time_budget"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["init"].at("num_bases"), InitOptions{}.num_bases);
+  EXPECT_EQ(j["trainer"].at("iterations"), TrainerOptions{}.iterations);
+  EXPECT_EQ(j["expansion"].at("every"), ExpansionOptions{}.every);
+}
+
+// What changes the result is in the fingerprint; how the run goes is not.
+TEST(FitOptionsTest, ResumeFingerprintLeavesTheConductOut) {
+  const FitOptions a = ResolveFitOptions(FitOptions{}, kDepthFromDataset);
+  FitOptions conduct = a;
+  conduct.resume = true;
+  conduct.checkpoint_every = 7;
+  conduct.validate_every = 3;
+  conduct.log_every = 1;
+  conduct.time_budget = 60;
+  conduct.panorama_width = 64;
+  EXPECT_EQ(ResumeFingerprint(a), ResumeFingerprint(conduct));
+  FitOptions bases = a;
+  bases.init.num_bases = 3;
+  const std::optional<JsonDifference> d =
+      FirstDifference(ResumeFingerprint(a), ResumeFingerprint(bases));
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->path, "init.num_bases");
+  FitOptions seed = a;
+  seed.seed = 9;
+  EXPECT_NE(ResumeFingerprint(a), ResumeFingerprint(seed));
+  // Without the expansion its options do not matter.
+  FitOptions off = a, off_other = a;
+  off.expand = off_other.expand = false;
+  off_other.expansion.every = 5;
+  off_other.prior_cmd = "other {in} {out}";
+  EXPECT_EQ(ResumeFingerprint(off), ResumeFingerprint(off_other));
+}
+
+TEST(FitOptionsTest, CheckNamesTheOption) {
+  FitOptions o;
+  o.deterministic = true;
+  o.time_budget = 10;
+  try {
+    o.Check();
+    FAIL() << "--deterministic with --time-budget was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), "--time-budget");
+  }
+  FitOptions bad;
+  bad.checkpoint_every = 0;
+  EXPECT_THROW(bad.Check(), Error);
+  FitOptions init;
+  init.init.sh_degree = 4;
+  EXPECT_THROW(init.Check(), Error);
+}
+
+}  // namespace
+}  // namespace pano4d

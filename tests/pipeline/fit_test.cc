@@ -1,0 +1,136 @@
+// The fit controller in process, on the tiny synthetic scene: what its
+// summary and fit.json record, why it stopped, and the one resume check.
+#include "src/pipeline/fit.h"
+
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+#include "src/core/json.h"
+#include "src/datasets/synth_generate.h"
+#include "src/pipeline/depth.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+
+class FitControllerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    synth::SynthOptions s;
+    s.preset = "tiny";
+    s.seed = 3;
+    synth::GenerateSynthScene(s, dir_->path() / "tiny");
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  // A workspace listed from the tiny dataset (its depth given).
+  static Workspace Listed(const std::string& name) {
+    const Workspace ws(dir_->path() / name);
+    DepthOptions d;
+    d.dataset = dir_->path() / "tiny";
+    RunDepth(ws, d);
+    return ws;
+  }
+
+  static FitOptions Short(int iterations) {
+    FitOptions o;
+    o.trainer.iterations = iterations;
+    o.expand = false;
+    o.validate_every = o.checkpoint_every = iterations;
+    return o;
+  }
+
+  static testing::TempDir* dir_;
+};
+testing::TempDir* FitControllerTest::dir_ = nullptr;
+
+TEST_F(FitControllerTest, SummaryRecordsTheOptionsGivenAndUsed) {
+  const Workspace ws = Listed("ws_summary");
+  const FitSummary s = RunFit(ws, Short(20));
+  EXPECT_EQ(s.termination, FitTermination::kIterationsDone);
+  EXPECT_EQ(s.iterations, 20);
+  EXPECT_FALSE(s.given.depth_weight);
+  EXPECT_EQ(s.used.depth_weight, kGivenDepthWeight);
+  EXPECT_EQ(s.used.trainer.depth_weight, kGivenDepthWeight);
+  EXPECT_EQ(s.depth_source, kDepthFromDataset);
+  EXPECT_FALSE(s.expanded);
+  ASSERT_TRUE(s.evaluation);
+  EXPECT_EQ(s.val_frames, 16u);
+  EXPECT_GT(s.train_psnr, 10.0);
+  const Json fit = ReadJson(ws.fit_json());
+  EXPECT_EQ(fit, s.ToJson());
+  EXPECT_EQ(fit.at("termination"), "iterations done");
+  EXPECT_TRUE(fit.at("options_given").at("depth_weight").is_null());
+  EXPECT_EQ(fit.at("options_used").at("depth_weight"), kGivenDepthWeight);
+  EXPECT_EQ(fit.at("options_used").at("init"), InitOptions{}.ToJson());
+  EXPECT_TRUE(fit.at("metrics").at("mpsnr").is_number());
+  EXPECT_NE(s.FullReport().find("none (--no-expansion)"), std::string::npos);
+  EXPECT_NE(s.BriefReport().find("20 iterations (iterations done)"),
+            std::string::npos)
+      << s.BriefReport();
+}
+
+// Stop() before Run() stops after the first iteration, checkpointed; the
+// run resumes to the end from there.
+TEST_F(FitControllerTest, StopCheckpointsAndTheRunResumes) {
+  const Workspace ws = Listed("ws_stop");
+  FitController stopped(ws, Short(12), LoadFitInputs(ws));
+  stopped.Stop();
+  const FitSummary a = stopped.Run();
+  EXPECT_EQ(a.termination, FitTermination::kStopped);
+  EXPECT_EQ(a.iterations, 1);
+  EXPECT_TRUE(fs::exists(ws.checkpoint()));
+  EXPECT_EQ(ReadJson(ws.fit_json()).at("termination"), "stopped");
+  FitOptions resume = Short(12);
+  resume.resume = true;
+  const FitSummary b = RunFit(ws, resume);
+  EXPECT_EQ(b.termination, FitTermination::kIterationsDone);
+  EXPECT_EQ(b.resumed_at, 1);
+  EXPECT_EQ(b.iterations, 12);
+
+  FitOptions budget = Short(12);
+  budget.time_budget = 1e-9;
+  const FitSummary c = RunFit(Listed("ws_budget"), budget);
+  EXPECT_EQ(c.termination, FitTermination::kTimeBudget);
+  EXPECT_EQ(c.iterations, 1);
+}
+
+// One check, of every option that changes the result, naming the first
+// that differs; how the run goes may change.
+TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
+  const Workspace ws = Listed("ws_resume");
+  RunFit(ws, Short(10));
+  const FitOptions used = ResolveFitOptions(Short(10), kDepthFromDataset);
+  EXPECT_FALSE(CheckpointMismatch(ws, used));
+  FitOptions other = Short(10);
+  other.resume = true;
+  other.init.num_bases = 3;
+  try {
+    RunFit(ws, other);
+    FAIL() << "a checkpoint of 20 motion bases resumed with 3";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "option init.num_bases") << e.what();
+    EXPECT_EQ(e.value(), "20") << e.what();
+  }
+  const std::optional<std::string> why =
+      CheckpointMismatch(ws, ResolveFitOptions(other, kDepthFromDataset));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("init.num_bases"), std::string::npos) << *why;
+  FitOptions seed = Short(10);
+  seed.resume = true;
+  seed.seed = 5;
+  EXPECT_THROW(RunFit(ws, seed), Error);
+  FitOptions conduct = Short(10);
+  conduct.resume = true;
+  conduct.log_every = 1;
+  conduct.checkpoint_every = 3;
+  EXPECT_EQ(RunFit(ws, conduct).resumed_at, 10);
+}
+
+}  // namespace
+}  // namespace pano4d

@@ -1,0 +1,145 @@
+// The stage planner of `pano4d run`: every rule that leaves a stage out, and
+// the reason it gives.
+#include "src/pipeline/planner.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+namespace {
+
+PlanFacts Video() {
+  PlanFacts f;
+  f.input = InputKind::kVideo;
+  f.input_path = "clip.mp4";
+  return f;
+}
+
+PlanFacts SynthDataset() {
+  PlanFacts f;
+  f.input = InputKind::kDataset;
+  f.input_path = "small";
+  f.poses_given = true;
+  f.depth_given = true;
+  f.dynamic_fraction = 0.1;
+  f.target_views = 96;
+  f.unseen_fraction = 0.35;
+  f.ground_truth = true;
+  f.eval_requested = true;
+  return f;
+}
+
+TEST(PlannerTest, AVideoRunsEveryStageButEvaluation) {
+  const Plan plan = MakePlan(Video());
+  ASSERT_EQ(plan.stages.size(), 6u);
+  const char* order[] = {"sfm", "depth", "motion", "fit", "expansion", "eval"};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(plan.stages[i].stage, order[i]);
+  EXPECT_TRUE(plan.Runs("sfm"));
+  EXPECT_TRUE(plan.Runs("depth"));
+  EXPECT_TRUE(plan.Get("motion").pending);
+  EXPECT_NE(plan.Get("motion").why.find("after depth"), std::string::npos);
+  EXPECT_TRUE(plan.Runs("fit"));
+  // No target views: the expansion's own trajectories are the targets.
+  EXPECT_TRUE(plan.Runs("expansion"));
+  EXPECT_FALSE(plan.Runs("eval"));
+  EXPECT_NE(plan.Get("eval").why.find("no ground truth"), std::string::npos);
+}
+
+TEST(PlannerTest, GivenPosesAndDepthLeaveSfmAndDepthOut) {
+  PlanFacts colmap = Video();
+  colmap.input = InputKind::kColmap;
+  colmap.poses_given = true;
+  Plan plan = MakePlan(colmap);
+  EXPECT_FALSE(plan.Runs("sfm"));
+  EXPECT_NE(plan.Get("sfm").why.find("poses given"), std::string::npos);
+  EXPECT_TRUE(plan.Runs("depth"));
+
+  plan = MakePlan(SynthDataset());
+  EXPECT_FALSE(plan.Runs("sfm"));
+  EXPECT_FALSE(plan.Runs("depth"));
+  EXPECT_NE(plan.Get("depth").why.find("depth given"), std::string::npos);
+  EXPECT_TRUE(plan.Runs("eval"));
+
+  // A dataset without depth: COLMAP triangulates with its poses, for the
+  // estimated depth to be aligned to.
+  PlanFacts no_depth = SynthDataset();
+  no_depth.depth_given = false;
+  plan = MakePlan(no_depth);
+  EXPECT_TRUE(plan.Runs("sfm"));
+  EXPECT_NE(plan.Get("sfm").why.find("triangulates"), std::string::npos);
+  EXPECT_TRUE(plan.Runs("depth"));
+}
+
+TEST(PlannerTest, NoDynamicContentMeansNoMotion) {
+  PlanFacts f = SynthDataset();
+  f.dynamic_fraction = 0.0;
+  Plan plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("motion"));
+  EXPECT_FALSE(plan.Get("motion").pending);
+  EXPECT_NE(plan.Get("motion").why.find("no dynamic content"),
+            std::string::npos);
+  f.dynamic_fraction = kMinDynamicFraction * 0.5;
+  EXPECT_FALSE(MakePlan(f).Runs("motion"));
+  f.dynamic_fraction = kMinDynamicFraction * 2;
+  EXPECT_TRUE(MakePlan(f).Runs("motion"));
+  f.no_motion = true;
+  plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("motion"));
+  EXPECT_NE(plan.Get("motion").why.find("--no-motion"), std::string::npos);
+}
+
+TEST(PlannerTest, NoTargetOutsideTheCoverageMeansNoExpansion) {
+  PlanFacts f = SynthDataset();
+  f.unseen_fraction = kMinUnseenFraction * 0.5;
+  Plan plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("expansion"));
+  EXPECT_NE(plan.Get("expansion").why.find("outside the training coverage"),
+            std::string::npos);
+  f.unseen_fraction = 0.2;
+  plan = MakePlan(f);
+  EXPECT_TRUE(plan.Runs("expansion"));
+  EXPECT_NE(plan.Get("expansion").why.find("20.00%"), std::string::npos);
+  // Target views of unknown coverage: expand.
+  f.unseen_fraction.reset();
+  EXPECT_TRUE(MakePlan(f).Runs("expansion"));
+  f.no_expansion = true;
+  plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("expansion"));
+  EXPECT_NE(plan.Get("expansion").why.find("--no-expansion"),
+            std::string::npos);
+}
+
+TEST(PlannerTest, EvaluationNeedsGroundTruthAndTheAsking) {
+  PlanFacts f = SynthDataset();
+  f.eval_requested = false;
+  Plan plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("eval"));
+  EXPECT_NE(plan.Get("eval").why.find("--eval"), std::string::npos);
+  f.eval_requested = true;
+  f.ground_truth = false;
+  EXPECT_FALSE(MakePlan(f).Runs("eval"));
+}
+
+TEST(PlannerTest, JsonAndTableSayEveryStageAndWhy) {
+  const Plan plan = MakePlan(SynthDataset());
+  const nlohmann::json j = plan.ToJson();
+  EXPECT_EQ(j["input"]["kind"], "dataset");
+  EXPECT_DOUBLE_EQ(j["facts"]["unseen_fraction"].get<double>(), 0.35);
+  ASSERT_EQ(j["stages"].size(), 6u);
+  for (const auto& s : j["stages"]) {
+    EXPECT_TRUE(s.contains("run"));
+    EXPECT_FALSE(s["why"].get<std::string>().empty());
+  }
+  const std::string table = plan.Table();
+  EXPECT_NE(table.find("sfm        left out"), std::string::npos) << table;
+  EXPECT_NE(table.find("fit        run"), std::string::npos) << table;
+  EXPECT_THROW(plan.Get("tracks"), Error);
+  // Unknown facts are null, not made up.
+  EXPECT_TRUE(
+      MakePlan(Video()).ToJson()["facts"]["dynamic_fraction"].is_null());
+}
+
+}  // namespace
+}  // namespace pano4d
