@@ -11,7 +11,6 @@
 #include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/database.h"
 #include "colmap_ext/masks.h"
-#include "src/geometry/motion_segmentation.h"
 #include "colmap_ext/model.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
@@ -22,6 +21,7 @@
 #include "src/core/timer.h"
 #include "src/core/video.h"
 #include "src/core/workspace.h"
+#include "src/geometry/motion_segmentation.h"
 
 #include <cstdio>
 
@@ -394,8 +394,8 @@ SfmReport RunSfm(const SfmOptions& o) {
     // Masks from an earlier run: their fraction, from the files.
     double sum = 0;
     for (const fs::path& f : frames) {
-      const cv::Mat mask = ReadMask(MaskPathFor(
-          workspace.dynamic_masks(), f.filename().string()));
+      const cv::Mat mask = ReadMask(
+          MaskPathFor(workspace.dynamic_masks(), f.filename().string()));
       sum += cv::countNonZero(mask) / static_cast<double>(mask.total());
     }
     report.mean_dynamic_fraction = sum / frames.size();

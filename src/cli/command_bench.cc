@@ -40,7 +40,8 @@ void AddBenchCamera(CLI::App* bench, Action* action) {
                   "Minimum timing per measurement")
       ->check(CLI::Range(0.001, 60.0))
       ->capture_default_str();
-  sub->add_flag("--json", o->json, "One JSON object per line instead of a table");
+  sub->add_flag("--json", o->json,
+                "One JSON object per line instead of a table");
   sub->callback([action, o] {
     *action = [o] { return Print(RunBenchCamera(*o), o->json); };
   });
@@ -80,13 +81,12 @@ void AddBenchRender(CLI::App* bench, Action* action) {
     *action = [o] {
       if (o->width > 0 || o->height > 0) {
         if (o->width <= 0 || o->height <= 0) {
-          throw Error("--width/--height", "",
-                      std::to_string(o->width) + "x" +
-                          std::to_string(o->height),
-                      "give both, positive");
+          throw Error(
+              "--width/--height", "",
+              std::to_string(o->width) + "x" + std::to_string(o->height),
+              "give both, positive");
         }
-        o->sizes = {std::to_string(o->width) + "x" +
-                    std::to_string(o->height)};
+        o->sizes = {std::to_string(o->width) + "x" + std::to_string(o->height)};
       }
       return Print(RunBenchRender(*o), o->json);
     };

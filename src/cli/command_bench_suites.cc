@@ -36,7 +36,8 @@ void AddBenchStability(CLI::App* bench, Action* action) {
     *action = [o] {
       const StabilityResult r = RunBenchStability(*o);
       if (!o->out.empty())
-        WriteJson(o->out, {{"cases", r.bench.rows}, {"non_finite", r.non_finite}});
+        WriteJson(o->out,
+                  {{"cases", r.bench.rows}, {"non_finite", r.non_finite}});
       if (o->json) {
         std::cout << nlohmann::json(r.bench.rows).dump(2) << "\n";
       } else {

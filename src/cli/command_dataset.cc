@@ -5,10 +5,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "src/datasets/dataset.h"
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/core/json.h"
+#include "src/datasets/dataset.h"
 
 namespace pano4d::cli {
 namespace {

@@ -72,8 +72,7 @@ void AddDemoCommand(CLI::App& app, Action* action) {
       s.seed = static_cast<std::uint32_t>(o->run.fit.seed);
       const bool made = synth::EnsureSynthScene(s, o->run.dataset);
       std::printf("pano4d: the synthetic scene in %s is %s\n",
-                  o->run.dataset.c_str(),
-                  made ? "new" : "from an earlier run");
+                  o->run.dataset.c_str(), made ? "new" : "from an earlier run");
       const RunSummary r = RunPipeline(o->run, &std::cout);
       std::printf("pano4d demo: done in %.1f s; the report is %s\n",
                   total.WallSeconds(), (r.report.dir / "index.md").c_str());

@@ -24,11 +24,7 @@ void AddDepthCommand(CLI::App& app, Action* action) {
       "maps aligned to the SfM points; writes WS/pano4d/frames.json");
   sub->add_option("--workspace", o->workspace, "The workspace (created)")
       ->required();
-  sub->add_option("--dataset", o->depth.dataset,
-                  "A dataset with known cameras (DyCheck layout, e.g. from "
-                  "`pano4d synth`; Nvidia; Kubric-4D): its cameras, depth "
-                  "and validation split")
-      ->check(CLI::ExistingDirectory);
+  AddDatasetOption(sub, &o->depth.dataset);
   AddFactorOption(sub, &o->depth.factor);
   sub->add_option("--depth-dir", o->depth.depth_dir,
                   "Depth maps from another tool, <frame>.npy/.png (mm)/.tiff/"

@@ -20,9 +20,7 @@ void AddEvalCommand(CLI::App& app, Action* action) {
                          "(m*) and on unseen pixels (u*); per-frame CSV, mean "
                          "JSON and a Markdown table beside the "
                          "paper's numbers");
-  sub->add_option("--dataset", o->dataset,
-                  "Dataset folder (DyCheck layout, Nvidia, Kubric-4D)")
-      ->required();
+  AddDatasetOption(sub, &o->dataset)->required();
   sub->add_option(
          "--renders", o->renders,
          "Folder of renders named like the dataset's frames (<id>.png)")

@@ -18,21 +18,13 @@ void AddRunCommand(CLI::App& app, Action* action) {
       "Plan and run every stage on a video, images, COLMAP workspace or "
       "dataset: the plan says which stages run, which are left out and why");
   auto* input = sub->add_option_group("input", "exactly one of");
-  input
-      ->add_option("--video", o->video, "A video file (COLMAP estimates poses)")
-      ->check(CLI::ExistingFile);
-  input->add_option("--images", o->images, "A folder of frames, in order")
-      ->check(CLI::ExistingDirectory);
+  AddFramesInputOptions(input, &o->video, &o->images);
   input
       ->add_option("--colmap", o->colmap,
                    "A COLMAP workspace with a model (poses given); it is "
                    "also the workspace unless --workspace says otherwise")
       ->check(CLI::ExistingDirectory);
-  input
-      ->add_option("--dataset", o->dataset,
-                   "A dataset (DyCheck iPhone, Nvidia, Kubric-4D, synth): "
-                   "poses, depth and validation frames given")
-      ->check(CLI::ExistingDirectory);
+  AddDatasetOption(input, &o->dataset);
   input->require_option(1);
   sub->add_option("--workspace", o->workspace, "The workspace (created)");
   sub->add_flag("--eval", o->eval,

@@ -19,15 +19,8 @@ void AddSfmCommand(CLI::App& app, Action* action) {
       "Camera poses and sparse points with COLMAP (feature_extractor, "
       "matcher, mapper, image_undistorter), from a video or a folder of "
       "images, with moving objects masked out");
-  sub->add_option("--video", sfm->video, "Input video file")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--images", sfm->images, "Input folder of .png/.jpg images")
-      ->check(CLI::ExistingDirectory);
-  sub->add_option("--dataset", o->dataset,
-                  "A dataset with known cameras (DyCheck, Nvidia, Kubric-4D "
-                  "layouts): its training frames keep their poses and colmap "
-                  "point_triangulator adds sparse points")
-      ->check(CLI::ExistingDirectory);
+  AddFramesInputOptions(sub, &sfm->video, &sfm->images);
+  AddDatasetOption(sub, &o->dataset);
   sub->add_option("--workspace", sfm->workspace,
                   "COLMAP workspace (created): images/, masks/, database.db, "
                   "sparse/0, pano4d/")
@@ -61,7 +54,9 @@ void AddSfmCommand(CLI::App& app, Action* action) {
                   "alignment, also in pano4d/metrics/sfm_ground_truth.json")
       ->check(CLI::ExistingDirectory);
   sub->footer(
-      "Each step is skipped when an earlier run completed it with the same "
+      "With --dataset the training frames keep their cameras and colmap "
+      "point_triangulator adds the sparse points. Each step is skipped when "
+      "an earlier run completed it with the same "
       "inputs (logs and stamps in WS/pano4d/logs/, step times in "
       "timings.json); --force redoes all.");
   sub->callback([action, o] {

@@ -42,8 +42,7 @@ void AddSynthCommand(CLI::App& app, Action* action) {
   sub->callback([action, o] {
     *action = [o] {
       Timer timer;
-      const synth::SynthSummary s =
-          synth::GenerateSynthScene(o->synth, o->out);
+      const synth::SynthSummary s = synth::GenerateSynthScene(o->synth, o->out);
       std::printf(
           "pano4d synth: %s (%dx%d at 1x, %d training frames, 2 x %d "
           "validation frames), seed %u%s\n"

@@ -112,8 +112,8 @@ void AddExpansionProductOptions(CLI::App* app, FitOptions* o) {
   app->add_option_function<std::string>(
          "--warp-depth",
          [o](const std::string& v) {
-           o->warp_depth = v == "given" ? WarpDepth::kGiven
-                                        : WarpDepth::kRendered;
+           o->warp_depth =
+               v == "given" ? WarpDepth::kGiven : WarpDepth::kRendered;
          },
          "The depth the source frames are warped with: given (each frame's "
          "depth map, rendered depth where it has none) or rendered (from "
@@ -169,6 +169,26 @@ void AddFitOptions(CLI::App* app, FitOptions* o) {
   app->add_option("--time-budget", o->time_budget,
                   "Stop after this many seconds of wall time (0: no limit)")
       ->capture_default_str();
+}
+
+void AddFramesInputOptions(CLI::App* app, std::filesystem::path* video,
+                           std::filesystem::path* images) {
+  app->add_option("--video", *video,
+                  "A video file (COLMAP estimates the poses)")
+      ->check(CLI::ExistingFile);
+  app->add_option("--images", *images,
+                  "A folder of .png/.jpg frames, in name order (COLMAP "
+                  "estimates the poses)")
+      ->check(CLI::ExistingDirectory);
+}
+
+CLI::Option* AddDatasetOption(CLI::App* app, std::filesystem::path* dataset) {
+  return app
+      ->add_option("--dataset", *dataset,
+                   "A dataset with known cameras: DyCheck iPhone (or pano4d "
+                   "synth), Nvidia Dynamic Scenes or Kubric-4D; its cameras, "
+                   "and its depth and validation frames where it has them")
+      ->check(CLI::ExistingDirectory);
 }
 
 void AddFactorOption(CLI::App* app, int* factor) {

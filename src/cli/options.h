@@ -15,7 +15,8 @@
 
 namespace CLI {
 class App;
-}
+class Option;
+}  // namespace CLI
 
 namespace pano4d::cli {
 
@@ -46,6 +47,15 @@ void AddNoExpansionFlag(CLI::App* app, bool* expand);
 // --depth-weight, --deterministic, --checkpoint-every, --validate-every,
 // --log-every, --time-budget.
 void AddFitOptions(CLI::App* app, FitOptions* options);
+
+// The frames of a capture without poses: --video (a file) and --images (a
+// folder of .png/.jpg frames in name order), both checked to exist.
+void AddFramesInputOptions(CLI::App* app, std::filesystem::path* video,
+                           std::filesystem::path* images);
+// --dataset: a folder in one of the layouts pano4d reads (DyCheck iPhone,
+// Nvidia, Kubric-4D, pano4d synth), checked to exist. Returns the option
+// (for ->required()).
+CLI::Option* AddDatasetOption(CLI::App* app, std::filesystem::path* dataset);
 
 // A dataset's resolution divisor (--factor).
 void AddFactorOption(CLI::App* app, int* factor);

@@ -2,11 +2,11 @@
 
 #include <map>
 
+#include "src/core/error.h"
+#include "src/core/json.h"
 #include "src/datasets/dycheck_dataset.h"
 #include "src/datasets/kubric_dataset.h"
 #include "src/datasets/nvidia_dataset.h"
-#include "src/core/error.h"
-#include "src/core/json.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;

@@ -28,7 +28,7 @@ struct DatasetFrame {
   int time_id = 0;     // frame index t in [0, num_times)
   PosedCamera camera;  // at the loaded resolution
   std::filesystem::path rgb;
-  std::filesystem::path depth;      // empty when the dataset has none
+  std::filesystem::path depth;  // empty when the dataset has none
   DepthConvention depth_convention = DepthConvention::kZ;  // read: ReadDepth
   std::filesystem::path covisible;  // validation frames only; empty when absent
 };

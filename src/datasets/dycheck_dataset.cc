@@ -3,9 +3,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "src/datasets/dycheck_camera.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/datasets/dycheck_camera.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;

@@ -2,8 +2,8 @@
 
 #include <filesystem>
 
-#include "src/datasets/dataset.h"
 #include "src/core/npy.h"
+#include "src/datasets/dataset.h"
 
 namespace pano4d {
 

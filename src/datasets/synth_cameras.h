@@ -3,8 +3,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "src/datasets/synth_scene.h"
 #include "src/core/posed_camera.h"
+#include "src/datasets/synth_scene.h"
 
 namespace pano4d::synth {
 

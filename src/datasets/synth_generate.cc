@@ -2,15 +2,15 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "src/datasets/dycheck_dataset.h"
-#include "src/datasets/synth_cameras.h"
-#include "src/datasets/synth_render.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/json.h"
 #include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/core/timer.h"
+#include "src/datasets/dycheck_dataset.h"
+#include "src/datasets/synth_cameras.h"
+#include "src/datasets/synth_render.h"
 
 namespace pano4d::synth {
 namespace fs = std::filesystem;

@@ -4,9 +4,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "src/datasets/synth_scene.h"
 #include "src/core/image.h"
 #include "src/core/posed_camera.h"
+#include "src/datasets/synth_scene.h"
 
 namespace pano4d::synth {
 

@@ -6,8 +6,8 @@
 
 #include <Eigen/Core>
 
-#include "src/datasets/synth_texture.h"
 #include "src/core/rigid.h"
+#include "src/datasets/synth_texture.h"
 
 namespace pano4d::synth {
 

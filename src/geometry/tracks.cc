@@ -103,8 +103,8 @@ Tracks2D ChainFlowTracks(const std::vector<cv::Mat>& frames, int reference,
             cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
         // The preset stops at half resolution; chained over the 24 links
         // from the canonical time to a clip's ends its sub-pixel error
-        // drifts: on the small synthetic scene, 6.4 px median at the far
-        // end against 2.4 px at full resolution (docs/ARCHITECTURE.md).
+        // drifts (docs/experiments/
+        // 2026-11-23-full-resolution-tracks-and-static-scale-clamp.md).
         dis->setFinestScale(0);
         for (int l = r.start; l < r.end; ++l) {
           Link& link = links[l];

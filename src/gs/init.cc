@@ -146,7 +146,8 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
     m.quats[i * 4 + 1] = m.quats[i * 4 + 2] = m.quats[i * 4 + 3] = 0;
     m.opacities[i] = opacity;
     for (int c = 0; c < 3; ++c)
-      m.sh[(i * k) * 3 + c] = (cloud.colors[i][c] - 0.5f) / static_cast<float>(kShC0);
+      m.sh[(i * k) * 3 + c] =
+          (cloud.colors[i][c] - 0.5f) / static_cast<float>(kShC0);
   }
   return m;
 }

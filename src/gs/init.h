@@ -30,9 +30,9 @@ struct InitOptions {
   PointCloudFilterOptions filter;    // its voxel_size is set from the above
   std::int64_t max_static = 150000;  // CPU time grows with the count
   std::int64_t max_dynamic = 50000;
-  // K; 0 treats every pixel as static. 20 rather than 10: validation
-  // mPSNR +0.68 dB over seeds 0-2 on the small synthetic scene, whose snake
-  // bends (docs/ARCHITECTURE.md).
+  // K; 0 treats every pixel as static. 20 rather than 10: each basis is
+  // one rigid motion, and a bending object needs more of them
+  // (docs/experiments/2026-11-22-motion-bases-10-vs-20.md).
   int num_bases = 20;
   // Moving objects are solid, but the canonical frame shows one side of
   // them: its moving pixels start Gaussians on that surface only, a shell
@@ -40,7 +40,7 @@ struct InitOptions {
   // also seeds `dynamic_layers` Gaussians behind it, evenly out to
   // dynamic_thickness x the depth that a round cross-section of the mask's
   // local width has there (ChordPixels in init.cc). 0 leaves the shell.
-  // Measured in docs/ARCHITECTURE.md ("The moving objects' volume").
+  // Measured in docs/experiments/2026-11-24-moving-objects-volume.md.
   double dynamic_thickness = 1.0;
   int dynamic_layers = 2;
   int track_stride = 3;  // seeds: every stride-th dynamic pixel
@@ -79,7 +79,6 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
 // draws the motion clusters' k-means start.
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                               int num_times, const InitOptions& options,
-                              std::uint64_t seed,
-                              InitReport* report = nullptr);
+                              std::uint64_t seed, InitReport* report = nullptr);
 
 }  // namespace pano4d

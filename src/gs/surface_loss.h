@@ -67,8 +67,8 @@ NormalFlatness NormalFlatnessLoss(const GaussianModelT<T>& model,
 // bases are shared, so at a given time some of the object's Gaussians land
 // behind that surface, where nothing in the training view can see them;
 // from a camera 70 degrees aside they stand beside the object, in front of
-// the background (on the small synthetic scene they were 92% of what made
-// covisible validation pixels render too near, docs/ARCHITECTURE.md).
+// the background, and make the covisible pixels render too near
+// (docs/experiments/2026-11-22-hidden-depth-term.md).
 struct HiddenDepth {
   double loss = 0.0;           // weight x mean hinge over the candidates
   std::int64_t gaussians = 0;  // candidates: rows >= first inside the mask

@@ -116,7 +116,8 @@ std::vector<TrainingView> LoadTrainingViews(
       v.dynamic.resize(static_cast<std::size_t>(w) * h);
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
-          v.dynamic[y * w + x] = mask.at<std::uint8_t>(y, x) >= 128 ? kMaskOn : 0;
+          v.dynamic[y * w + x] =
+              mask.at<std::uint8_t>(y, x) >= 128 ? kMaskOn : 0;
     }
   }
   return views;

@@ -53,7 +53,8 @@ struct TrainerOptions {
   // over Gaussians of max(0, largest / smallest scale - max_anisotropy).
   // Needle-like Gaussians fit the training rays and streak across every
   // other view. 10 rather than 4 since the normal term flattens Gaussians
-  // into discs (validation mPSNR +0.3 dB, docs/ARCHITECTURE.md).
+  // into discs, which a bound of 4 kept thick
+  // (docs/experiments/2026-11-22-depth-normal-flatness.md).
   double anisotropy_weight = 0.1;
   double max_anisotropy = 10.0;
   // Depth-normal flatness (surface_loss.h): normal_weight times the mean
@@ -65,9 +66,8 @@ struct TrainerOptions {
   // Hidden depth (surface_loss.h): hidden_weight times the mean over the
   // dynamic Gaussians inside a view's dynamic mask of
   // max(0, z / d - 1 - hidden_thickness): a moving object's Gaussians may
-  // not hide deeper behind its visible surface than it is thick.
-  // 1 and 0.1: validation mPSNR +0.39 dB over seeds 0-2 on the small
-  // synthetic scene (docs/ARCHITECTURE.md).
+  // not hide deeper behind its visible surface than it is thick
+  // (docs/experiments/2026-11-22-hidden-depth-term.md).
   double hidden_weight = 1.0;
   double hidden_thickness = 0.1;
   // Learning rates (3DGS's; positions, basis translations times the scene
@@ -100,11 +100,11 @@ struct TrainerOptions {
   // After every step a static Gaussian's scales are clamped to this many
   // pixels of the median training view at the median depth (16: the
   // largest initial scale, 8 voxels of the initialisation); 0: no clamp.
-  // Without it a few static Gaussians grow to 30-50 voxels, and where one
-  // lies in front of a validation view it veils it (validation mPSNR
-  // 22.2 on seed 1 against 24.7 with it, docs/ARCHITECTURE.md). 3DGS
-  // prunes such Gaussians only after its first opacity reset, which a
-  // budget of 3000 iterations never reaches.
+  // Without it a few static Gaussians grow to tens of voxels, and where one
+  // lies in front of a validation view it veils it. 3DGS prunes such
+  // Gaussians only after its first opacity reset, which a budget of 3000
+  // iterations never reaches
+  // (docs/experiments/2026-11-23-full-resolution-tracks-and-static-scale-clamp.md).
   double max_static_scale_pixels = 16.0;
   Eigen::Vector3f background = Eigen::Vector3f::Zero();
 

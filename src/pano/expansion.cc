@@ -32,7 +32,6 @@ constexpr float kWarpAlpha = 0.5f;
 // new Gaussian (a later step sees what an earlier one added).
 constexpr float kCoveredAlpha = 0.5f;
 
-
 // Colour quantised to 8 bits, as the refinement target is stored (so that a
 // resumed run, which reads the PNGs, sees what the first run saw).
 cv::Mat Quantised(const cv::Mat& rgb) {
@@ -544,8 +543,7 @@ const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
       iteration % options_.refine_every != 0)
     return nullptr;
   const std::size_t i =
-      SplitMix64(seed_ ^ static_cast<std::uint64_t>(iteration)) %
-      views_.size();
+      SplitMix64(seed_ ^ static_cast<std::uint64_t>(iteration)) % views_.size();
   const StoredView& v = views_[i];
   buffer_.camera = v.camera;
   buffer_.time = v.time;
@@ -591,7 +589,8 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
     NameViews(trainer, &cams);
     for (std::size_t k = 0; k < cams.size(); ++k) {
       const ExpandedView& v = cams[k];
-      const std::filesystem::path dm = StepDir(e) / ("dir_" + std::to_string(v.m));
+      const std::filesystem::path dm =
+          StepDir(e) / ("dir_" + std::to_string(v.m));
       const std::string& id = v.name;
       const cv::Mat refined =
           ReadRefined(dm / "refined" / (id + ".png"), v.camera);
@@ -662,7 +661,8 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
       const std::string& id = views[sources_[s].view].name;
       for (const ExpandedView& c : all_cameras_) {
         if (c.name != id) continue;
-        const std::filesystem::path dm = StepDir(c.e) / ("dir_" + std::to_string(c.m));
+        const std::filesystem::path dm =
+            StepDir(c.e) / ("dir_" + std::to_string(c.m));
         loaded.push_back({c.camera,
                           ReadRefined(dm / "refined" / (id + ".png"), c.camera),
                           ReadDepth(dm / "depth" / (id + ".npy"), c.camera)});

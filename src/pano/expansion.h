@@ -22,10 +22,10 @@ enum class WarpDepth {
   // are opaque enough to trust).
   kRendered,
   // The frame's own depth map where it has depth (a dataset's, or an
-  // estimate aligned to the SfM points), rendered depth elsewhere. On the
-  // small synthetic scene with the dataset's depth: validation mPSNR and
-  // uPSNR higher on every seed (docs/ARCHITECTURE.md, "Warping with the
-  // given depth").
+  // estimate aligned to the SfM points), rendered depth elsewhere: the
+  // rendered depth is a worse copy of depth the dataset gives (flying
+  // pixels at soft edges, the fit's error everywhere). Measured in
+  // docs/experiments/2026-11-24-warp-given-depth-and-refine-outside-3.md.
   kGiven,
 };
 const char* WarpDepthName(WarpDepth w);  // "rendered", "given"
@@ -42,11 +42,10 @@ struct ExpansionOptions {
   // L_refine's weight on the pixels outside M_e (the warped frames),
   // relative to those in it; 0 is the paper's loss, masked to M_e. Masked,
   // the Gaussians that fill M_e spread over the warped content around it,
-  // which no training frame sees from there. On the small synthetic scene
-  // 1 keeps validation mPSNR with expansion at that without it, and 3 lifts
-  // it by 0.2 dB on every seed (10 is less); the warped pixels are the
-  // other views' evidence of the geometry from the expanded cameras
-  // (docs/ARCHITECTURE.md, "Warping with the given depth").
+  // which no training frame sees from there; the warped pixels are the
+  // other views' evidence of the geometry from the expanded cameras.
+  // Measured in docs/experiments/2026-11-23-refine-outside-me.md and
+  // 2026-11-24-warp-given-depth-and-refine-outside-3.md.
   double refine_outside_weight = 3.0;
   // L_refine on one expanded view every this many iterations.
   int refine_every = 1;

@@ -31,9 +31,9 @@ constexpr float kFreeSpaceTolerance = 0.05f;
 // many expanded views see through (guessed depth included) as have it on
 // their surface, is in empty space: the views agree that something else is
 // there (free-space violations against support, as in depth-map fusion,
-// Merrell et al. 2007). 4: on the small synthetic scene it removes the
-// floaters that blurred covisible pixels and keeps most unseen content
-// (docs/ARCHITECTURE.md).
+// Merrell et al. 2007). 4 removes the floaters that blurred covisible
+// pixels and keeps most unseen content
+// (docs/experiments/2026-11-23-free-space-carving.md).
 constexpr int kFreeSpaceVotes = 4;
 
 // The view's depth made conservative for the test: each pixel holds the

@@ -67,9 +67,10 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
   // std::stable_sort buffer ignores the over-alignment of Eigen members.
   std::vector<std::size_t> order(given.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return given[a].time < given[b].time;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) {
+                     return given[a].time < given[b].time;
+                   });
   const auto views = [&](std::size_t i) -> const TrainingView& {
     return given[order[i]];
   };

@@ -34,8 +34,9 @@ struct PairsReport {
 
 // Writes out/clip_<k>/{cov,mask,src}/<i>.png and out/clip_<k>/meta.json
 // (direction angle, elevation, source frames, target cameras). `views` are
-// the training frames (any order: taken in time order), with depth. Throws pano4d::Error when
-// a view has no depth (the pairs need geometry) or there are no views.
+// the training frames (any order: taken in time order), with depth. Throws
+// pano4d::Error when a view has no depth (the pairs need geometry) or there are
+// no views.
 PairsReport MakeTrainingPairs(const std::vector<TrainingView>& views,
                               const PairOptions& options,
                               const std::filesystem::path& out);

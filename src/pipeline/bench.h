@@ -40,8 +40,8 @@ struct StabilityOptions {
   int fit_iterations = 300;  // of the short fits on the tiny scene
 };
 struct StabilityResult {
-  BenchResult bench;             // one row per case
-  std::int64_t non_finite = 0;   // over every case; must be 0
+  BenchResult bench;            // one row per case
+  std::int64_t non_finite = 0;  // over every case; must be 0
 };
 StabilityResult RunBenchStability(const StabilityOptions& options);
 

@@ -9,6 +9,7 @@
 #include "src/core/camera_check.h"
 #include "src/core/error.h"
 #include "src/core/frames.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/core/version.h"
 #include "src/core/workspace.h"
@@ -19,12 +20,6 @@
 
 namespace pano4d {
 namespace {
-
-std::string Format(const char* format, auto... args) {
-  char buffer[1024];
-  std::snprintf(buffer, sizeof(buffer), format, args...);
-  return buffer;
-}
 
 struct CameraCase {
   std::string label;
@@ -129,34 +124,33 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
                c = Median(compose_ms);
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
-  result.rows.push_back(
-      {{"workspace", ws.root().string()},
-       {"gaussians", scene.size()},
-       {"static", scene.statics.size()},
-       {"dynamic", scene.dynamics.size()},
-       {"width", width},
-       {"height", height},
-       {"threads", threads},
-       {"compose_ms", c},
-       {"forward_ms", f},
-       {"forward_backward_ms", f + b},
-       {"fps", 1e3 / f},
-       {"visible", visible / options.repeats},
-       {"pixel_evaluations_per_s",
-        evaluations / (1e-3 * f * options.repeats)}});
-  result.table = Format(
+  result.rows.push_back({{"workspace", ws.root().string()},
+                         {"gaussians", scene.size()},
+                         {"static", scene.statics.size()},
+                         {"dynamic", scene.dynamics.size()},
+                         {"width", width},
+                         {"height", height},
+                         {"threads", threads},
+                         {"compose_ms", c},
+                         {"forward_ms", f},
+                         {"forward_backward_ms", f + b},
+                         {"fps", 1e3 / f},
+                         {"visible", visible / options.repeats},
+                         {"pixel_evaluations_per_s",
+                          evaluations / (1e-3 * f * options.repeats)}});
+  result.table = StringPrintf(
       "pano4d %s bench render: the fitted scene of %s (%zu static, %zu "
       "dynamic Gaussians) from its %zu training cameras at their times; "
       "median of %d runs, %d threads\n",
-      kVersion, ws.root().c_str(), scene.statics.size(),
-      scene.dynamics.size(), cameras.size(), options.repeats, threads);
-  result.table += Format("%10s %10s %11s %12s %8s %18s %14s\n", "gaussians",
-                         "size", "compose ms", "forward ms", "fps",
-                         "fwd+bwd ms", "visible");
-  result.table += Format(
-      "%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n", scene.size(),
-      width, height, c, f, 1e3 / f, f + b,
-      static_cast<unsigned long long>(visible / options.repeats));
+      kVersion, ws.root().c_str(), scene.statics.size(), scene.dynamics.size(),
+      cameras.size(), options.repeats, threads);
+  result.table +=
+      StringPrintf("%10s %10s %11s %12s %8s %18s %14s\n", "gaussians", "size",
+                   "compose ms", "forward ms", "fps", "fwd+bwd ms", "visible");
+  result.table +=
+      StringPrintf("%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n",
+                   scene.size(), width, height, c, f, 1e3 / f, f + b,
+                   static_cast<unsigned long long>(visible / options.repeats));
   return result;
 }
 
@@ -166,13 +160,13 @@ BenchResult RunBenchCamera(const BenchCameraOptions& options) {
   const int grid_x = options.grid;
   const int grid_y = options.grid * 3 / 4;
   BenchResult result;
-  result.table = Format(
+  result.table = StringPrintf(
       "pano4d %s bench camera: 640x480, %d pixels per model (edge to edge, "
       "corners included), 1 thread\n",
       kVersion, (grid_x + 1) * (grid_y + 1));
-  result.table +=
-      Format("%-22s %-18s %13s %6s %6s %11s %13s\n", "model", "distortion",
-             "max err (px)", "fail", "iters", "project ns", "unproject ns");
+  result.table += StringPrintf("%-22s %-18s %13s %6s %6s %11s %13s\n", "model",
+                               "distortion", "max err (px)", "fail", "iters",
+                               "project ns", "unproject ns");
   for (const CameraCase& c : BenchCameras()) {
     const Camera& camera = c.camera;
     camera.Check(c.label);
@@ -211,11 +205,11 @@ BenchResult RunBenchCamera(const BenchCameraOptions& options) {
                            {"mean_iterations", stats.mean_iterations},
                            {"project_ns", project_ns},
                            {"unproject_ns", unproject_ns}});
-    result.table += Format(
-        "%-22s %-18s %13.2e %6lld %6.1f %11.1f %13.1f\n", model.c_str(),
-        c.label.c_str(), stats.max_error_px,
-        static_cast<long long>(stats.failures), stats.mean_iterations,
-        project_ns, unproject_ns);
+    result.table +=
+        StringPrintf("%-22s %-18s %13.2e %6lld %6.1f %11.1f %13.1f\n",
+                     model.c_str(), c.label.c_str(), stats.max_error_px,
+                     static_cast<long long>(stats.failures),
+                     stats.mean_iterations, project_ns, unproject_ns);
   }
   return result;
 }
@@ -224,13 +218,13 @@ BenchResult RunBenchRender(const BenchRenderOptions& options) {
   if (!options.workspace.empty()) return BenchFittedScene(options);
   const int threads = omp_get_max_threads();
   BenchResult result;
-  result.table = Format(
+  result.table = StringPrintf(
       "pano4d %s bench render: random view-filling scene, mean 3-sigma "
       "radius 4 px, opacity 0.5; median of %d runs, %d threads\n",
       kVersion, options.repeats, threads);
-  result.table += Format("%10s %10s %12s %8s %18s %14s %16s\n", "gaussians",
-                         "size", "forward ms", "fps", "fwd+bwd ms", "visible",
-                         "evals/s");
+  result.table +=
+      StringPrintf("%10s %10s %12s %8s %18s %14s %16s\n", "gaussians", "size",
+                   "forward ms", "fps", "fwd+bwd ms", "visible", "evals/s");
   for (const std::string& size : options.sizes) {
     int width = 0, height = 0;
     if (std::sscanf(size.c_str(), "%dx%d", &width, &height) != 2 ||
@@ -278,7 +272,7 @@ BenchResult RunBenchRender(const BenchRenderOptions& options) {
                              {"fps", 1e3 / forward_ms},
                              {"visible", stats.visible},
                              {"pixel_evaluations_per_s", evals_per_s}});
-      result.table += Format(
+      result.table += StringPrintf(
           "%10d %10s %12.2f %8.1f %18.2f %14llu %16.3g\n", n, size.c_str(),
           forward_ms, 1e3 / forward_ms, forward_backward_ms,
           static_cast<unsigned long long>(stats.visible), evals_per_s);

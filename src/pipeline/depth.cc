@@ -16,6 +16,7 @@
 #include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/progress.h"
+#include "src/core/strings.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/depth_map.h"
 #include "src/geometry/depth_alignment.h"
@@ -262,8 +263,7 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
     const WorkspaceFrame& f = frames->train[i];
     const Image image = ReadImage(f.rgb);
     const int w = f.camera.camera.width, h = f.camera.camera.height;
-    const double s =
-        std::min(1.0, double(o.stereo_long_side) / std::max(w, h));
+    const double s = std::min(1.0, double(o.stereo_long_side) / std::max(w, h));
     const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
     const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
     cv::Mat grey, small;
@@ -357,13 +357,11 @@ nlohmann::json DepthOptions::ToJson() const {
 }
 
 std::string DepthSummary::BriefReport() const {
-  char buffer[256];
-  std::snprintf(buffer, sizeof(buffer),
-                "%zu training frames (%d with depth), %zu validation frames, "
-                "%d times, depth from %s",
-                frames.train.size(), with_depth, frames.val.size(),
-                frames.num_times, frames.depth_source.c_str());
-  return buffer;
+  return StringPrintf(
+      "%zu training frames (%d with depth), %zu validation frames, %d times, "
+      "depth from %s",
+      frames.train.size(), with_depth, frames.val.size(), frames.num_times,
+      frames.depth_source.c_str());
 }
 
 DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
@@ -391,7 +389,8 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   }
   frames.depth_options = o.ToJson();
   WriteWorkspaceFrames(ws.root(), frames);
-  for (const WorkspaceFrame& f : frames.train) summary.with_depth += !f.depth.empty();
+  for (const WorkspaceFrame& f : frames.train)
+    summary.with_depth += !f.depth.empty();
   return summary;
 }
 

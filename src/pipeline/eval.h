@@ -14,8 +14,8 @@ namespace pano4d {
 
 struct EvalOptions {
   std::filesystem::path dataset;
-  std::filesystem::path renders;  // <id>.png per frame of the split
-  std::filesystem::path out;      // empty: <renders>/metrics
+  std::filesystem::path renders;        // <id>.png per frame of the split
+  std::filesystem::path out;            // empty: <renders>/metrics
   std::filesystem::path lpips_weights;  // empty: LPIPS reads n/a
   std::string split = "val";
   int factor = 2;  // the dataset's resolution divisor (DyCheck: 2)

@@ -6,6 +6,7 @@
 #include "src/core/error.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/strings.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/expansion_outputs.h"
@@ -15,19 +16,15 @@ namespace pano4d {
 namespace fs = std::filesystem;
 
 std::string ExpandSummary::FullReport() const {
-  char buffer[2048];
   const fs::path out = workspace.expand();
-  std::snprintf(
-      buffer, sizeof(buffer),
+  return StringPrintf(
       "pano4d expand: step %d (%.1f deg), %d views, holes %.1f%%, prior %s%s\n"
       "  products   %s\n  cameras    %s (COLMAP model: %s)\n"
       "  panoramas  %s\n",
       step.step, step.angle_degrees, step.views, 100 * step.hole_fraction,
-      step.prior.c_str(),
-      step.fallbacks > 0 ? " (fell back; see the log)" : "", step_dir.c_str(),
-      (out / "trajectories.json").c_str(), (out / "colmap").c_str(),
-      workspace.panorama().c_str());
-  return buffer;
+      step.prior.c_str(), step.fallbacks > 0 ? " (fell back; see the log)" : "",
+      step_dir.c_str(), (out / "trajectories.json").c_str(),
+      (out / "colmap").c_str(), workspace.panorama().c_str());
 }
 
 ExpandSummary RunExpand(const Workspace& ws, const ExpandOptions& options) {

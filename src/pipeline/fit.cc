@@ -252,8 +252,8 @@ FitSummary FitController::Run() {
       const fs::path dir = ws.expansion();
       EnsureDirectory(dir);
       ex.prior = MakePrior(o.prior_cmd, dir / "prior");
-      ex.expansion = std::make_unique<Expansion>(o.expansion, o.seed, dir,
-                                                 ex.prior.get());
+      ex.expansion =
+          std::make_unique<Expansion>(o.expansion, o.seed, dir, ex.prior.get());
       if (resuming) {
         const fs::path steps_path = dir / "steps.json";
         const int last =
@@ -312,10 +312,10 @@ FitSummary FitController::Run() {
         summary.seconds.validation += t.WallSeconds();
       }
       const double n = window.steps;
-      recorder.Record(it, {window.loss / n, window.l1 / n, window.depth / n,
-                           window.psnr / n,
-                           static_cast<double>(trainer.scene().size()), q.psnr,
-                           q.mpsnr, q.upsnr});
+      recorder.Record(
+          it, {window.loss / n, window.l1 / n, window.depth / n,
+               window.psnr / n, static_cast<double>(trainer.scene().size()),
+               q.psnr, q.mpsnr, q.upsnr});
       std::ostringstream status;
       status.precision(4);
       status << "loss " << window.loss / n << "  psnr " << window.psnr / n
@@ -352,8 +352,7 @@ FitSummary FitController::Run() {
 
   // Validation renders, scored with `pano4d eval`'s code. The ablation
   // without Gaussian refinement scores the panorama results instead.
-  summary.panorama_only = ex.expansion &&
-                          !o.expansion.gaussian_refinement &&
+  summary.panorama_only = ex.expansion && !o.expansion.gaussian_refinement &&
                           !ex.expansion->cameras().empty();
   if (!val.empty()) {
     RenderOutput out;
@@ -365,8 +364,7 @@ FitSummary FitController::Run() {
         WriteImage(ws.val_renders() / (v.name + ".png"), ToImage(out));
     }
     if (summary.panorama_only)
-      WritePanoramaResults(&trainer, ex.expansion.get(), val,
-                           ws.val_renders());
+      WritePanoramaResults(&trainer, ex.expansion.get(), val, ws.val_renders());
     if (inputs_.frames) {
       summary.evaluation = EvaluateRenders(
           ValidationDataset(ws, *inputs_.frames), ws.val_renders(), {});

@@ -57,7 +57,8 @@ std::unique_ptr<Trainer> MakeFitTrainer(GaussianScene scene,
                                         const FitOptions& used);
 
 // Renders `views` with `trainer` and scores them (QuickMetrics).
-QuickMetrics Validate(Trainer* trainer, const std::vector<ValidationView>& views);
+QuickMetrics Validate(Trainer* trainer,
+                      const std::vector<ValidationView>& views);
 
 class FitController {
  public:

@@ -38,9 +38,9 @@ nlohmann::json FitOptions::ToJson() const {
   trainer_json["depth_weight"] =
       depth_weight ? nlohmann::json(*depth_weight) : nlohmann::json();
   nlohmann::json expansion_json = expansion.ToJson();
-  expansion_json["warp_depth"] = warp_depth ? nlohmann::json(WarpDepthName(
-                                                  *warp_depth))
-                                            : nlohmann::json();
+  expansion_json["warp_depth"] =
+      warp_depth ? nlohmann::json(WarpDepthName(*warp_depth))
+                 : nlohmann::json();
   return {{"seed", seed},
           {"trainer", trainer_json},
           {"init", init.ToJson()},

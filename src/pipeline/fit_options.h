@@ -66,8 +66,8 @@ struct FitOptions {
 //   warp depth: the frames' own depth where the dataset gives it, rendered
 //     depth on estimated depth (stereo has holes and errors at the edges a
 //     warp needs most; not measured there).
-// docs/experiments/2026-10-depth-weight.md and 2026-11-warp-depth.md hold
-// the measurements.
+// Measured in docs/experiments/2026-11-23-depth-weight-5-on-dataset-depth.md
+// and 2026-11-24-warp-given-depth-and-refine-outside-3.md.
 FitOptions ResolveFitOptions(FitOptions given, const std::string& depth_source);
 
 // What a resumed fit must share with the run that wrote its checkpoint:

@@ -3,17 +3,13 @@
 #include <cstdio>
 #include <string>
 
+#include "src/core/strings.h"
+
 namespace pano4d {
 namespace {
 
-std::string Format(const char* format, auto... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), format, args...);
-  return buffer;
-}
-
 std::string Value(const std::optional<double>& v) {
-  return v ? Format("%.3f", *v) : "n/a";
+  return v ? StringPrintf("%.3f", *v) : "n/a";
 }
 
 std::optional<double> Mean(const EvaluationResult& e, const char* key) {
@@ -37,72 +33,76 @@ const char* FitTerminationName(FitTermination t) {
 }
 
 std::string FitSummary::BriefReport() const {
-  std::string s = Format(
+  std::string s = StringPrintf(
       "pano4d fit: %lld iterations (%s), %zu Gaussians, train PSNR %.2f dB",
       static_cast<long long>(iterations), FitTerminationName(termination),
       static_gaussians + dynamic_gaussians, train_psnr);
   if (evaluation) {
-    s += ", validation PSNR " + Value(Mean(*evaluation, "psnr")) +
-         " mPSNR " + Value(Mean(*evaluation, "mpsnr"));
+    s += ", validation PSNR " + Value(Mean(*evaluation, "psnr")) + " mPSNR " +
+         Value(Mean(*evaluation, "mpsnr"));
   }
-  return s + Format(", %.1f s", seconds.total);
+  return s + StringPrintf(", %.1f s", seconds.total);
 }
 
 std::string FitSummary::FullReport() const {
   const PhaseTimes& t = seconds.trainer;
   std::string s = "\npano4d fit report\n";
-  s += Format("  %-22s %lld", "iterations", static_cast<long long>(iterations));
+  s += StringPrintf("  %-22s %lld", "iterations",
+                    static_cast<long long>(iterations));
   if (resumed_at > 0)
-    s += Format(" (resumed at %lld)", static_cast<long long>(resumed_at));
+    s += StringPrintf(" (resumed at %lld)", static_cast<long long>(resumed_at));
   if (termination == FitTermination::kTimeBudget)
     s += " (stopped by the time budget)";
   if (termination == FitTermination::kStopped) s += " (stopped)";
-  s += Format("\n  %-22s static %zu, dynamic %zu, motion bases %d\n",
-              "Gaussians", static_gaussians, dynamic_gaussians, motion_bases);
-  s += Format("  %-22s %lld densified, %lld pruned\n", "densification",
-              static_cast<long long>(densified),
-              static_cast<long long>(pruned));
-  s += Format("  %-22s %lld Gaussian updates, %lld steps\n",
-              "skipped (non-finite)", static_cast<long long>(skipped_rows),
-              static_cast<long long>(skipped_steps));
-  s += Format(
+  s += StringPrintf("\n  %-22s static %zu, dynamic %zu, motion bases %d\n",
+                    "Gaussians", static_gaussians, dynamic_gaussians,
+                    motion_bases);
+  s += StringPrintf("  %-22s %lld densified, %lld pruned\n", "densification",
+                    static_cast<long long>(densified),
+                    static_cast<long long>(pruned));
+  s +=
+      StringPrintf("  %-22s %lld Gaussian updates, %lld steps\n",
+                   "skipped (non-finite)", static_cast<long long>(skipped_rows),
+                   static_cast<long long>(skipped_steps));
+  s += StringPrintf(
       "  %-22s %.1f s: init %.1f, forward %.1f, loss %.1f, backward %.1f, "
       "motion %.1f, optimiser %.1f, densify %.1f, compose %.1f, validation "
       "%.1f\n",
       "time", seconds.total, seconds.init, t.forward, t.loss, t.backward,
       t.motion, t.optimise, t.densify, t.compose, seconds.validation);
   if (expanded) {
-    s += Format(
+    s += StringPrintf(
         "  %-22s %zu steps, %.1f s, %zu refinement views, %lld static "
         "Gaussians in seen free space removed%s\n",
         "expansion", expansion_steps.size(), seconds.expansion,
         refinement_views, static_cast<long long>(carved),
         panorama_only ? " (validation: the panorama results)" : "");
   } else {
-    s += Format("  %-22s none (%s)\n", "expansion",
-                no_expansion_reason.c_str());
+    s += StringPrintf("  %-22s none (%s)\n", "expansion",
+                      no_expansion_reason.c_str());
   }
   const StepReport& l = last_step;
-  s += Format(
+  s += StringPrintf(
       "  %-22s %.5f (L1 %.5f, SSIM %.4f, depth %.5f, normal %.5f, "
       "hidden %.5f)\n",
       "last loss", l.loss, l.l1, l.ssim, l.depth, l.normal, l.hidden);
-  s += Format("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
-              train_psnr, train_frames);
+  s += StringPrintf("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
+                    train_psnr, train_frames);
   if (evaluation) {
     const EvaluationResult& e = *evaluation;
-    s += Format(
+    s += StringPrintf(
         "  %-22s PSNR %s  SSIM %s  mPSNR %s  mSSIM %s  uPSNR %s  uSSIM %s "
         "(%zu frames)\n",
         "validation", Value(Mean(e, "psnr")).c_str(),
         Value(Mean(e, "ssim")).c_str(), Value(Mean(e, "mpsnr")).c_str(),
         Value(Mean(e, "mssim")).c_str(), Value(Mean(e, "upsnr")).c_str(),
         Value(Mean(e, "ussim")).c_str(), val_frames);
-    s += Format("  %-22s %s\n", "metrics", workspace.metrics_json().c_str());
+    s += StringPrintf("  %-22s %s\n", "metrics",
+                      workspace.metrics_json().c_str());
   }
-  s += Format("  %-22s %s\n  %-22s %s\n", "run log",
-              workspace.fit_csv().c_str(), "checkpoint",
-              workspace.checkpoint().c_str());
+  s += StringPrintf("  %-22s %s\n  %-22s %s\n", "run log",
+                    workspace.fit_csv().c_str(), "checkpoint",
+                    workspace.checkpoint().c_str());
   return s;
 }
 
@@ -142,12 +142,12 @@ nlohmann::json FitSummary::ToJson() const {
         {"densify", t.densify},
         {"validation", seconds.validation},
         {"expansion", seconds.expansion}}},
-      {"expansion", expanded ? nlohmann::json{{"options",
-                                               used.expansion.ToJson()},
-                                              {"prior_cmd", used.prior_cmd},
-                                              {"steps", expansion_steps},
-                                              {"carved", carved}}
-                             : nlohmann::json()},
+      {"expansion", expanded
+                        ? nlohmann::json{{"options", used.expansion.ToJson()},
+                                         {"prior_cmd", used.prior_cmd},
+                                         {"steps", expansion_steps},
+                                         {"carved", carved}}
+                        : nlohmann::json()},
       {"final_loss", last_step.loss},
       {"train_psnr", train_psnr},
       {"options", trainer},

@@ -9,6 +9,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/progress.h"
+#include "src/core/strings.h"
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/scene_outputs.h"
 #include "src/render/ply.h"
@@ -16,12 +17,6 @@
 namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
-
-std::string Format(const char* format, auto... args) {
-  char buffer[2048];
-  std::snprintf(buffer, sizeof(buffer), format, args...);
-  return buffer;
-}
 
 // The cameras of a named path about the fitted scene's centre.
 std::vector<TimedCamera> PathCameras(const FittedWorkspace& fitted,
@@ -50,10 +45,9 @@ std::vector<TimedCamera> PathCameras(const FittedWorkspace& fitted,
 }  // namespace
 
 std::string RenderSummary::FullReport() const {
-  std::string s =
-      Format("pano4d render: %zu frames of %s in %s%s\n", frames, name.c_str(),
-             out.c_str(),
-             video.empty() ? "" : (", video " + video.string()).c_str());
+  std::string s = StringPrintf(
+      "pano4d render: %zu frames of %s in %s%s\n", frames, name.c_str(),
+      out.c_str(), video.empty() ? "" : (", video " + video.string()).c_str());
   for (const std::string& n : notes) s += "  not written: " + n + "\n";
   return s;
 }
@@ -116,11 +110,10 @@ RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
 }
 
 std::string ExportSummary::FullReport() const {
-  return Format(
+  return StringPrintf(
       "pano4d export: %d PLY file(s) (%zu Gaussians each%s) in %s\n"
       "  cameras: %zu training and %zu expanded, as a COLMAP model in %s\n",
-      ply_files, gaussians,
-      motion ? ", one file per time step" : ", no motion",
+      ply_files, gaussians, motion ? ", one file per time step" : ", no motion",
       (out / "ply").c_str(), training_cameras, expanded_cameras,
       (out / "colmap").c_str());
 }

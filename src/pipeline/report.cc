@@ -9,14 +9,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "src/pano/trajectory_io.h"
-#include "src/pipeline/scene_outputs.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/pano/trajectory_io.h"
+#include "src/pipeline/scene_outputs.h"
 #include "src/render/ply.h"
 
 namespace pano4d {

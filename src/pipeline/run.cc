@@ -13,6 +13,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/datasets/dataset.h"
 #include "src/pipeline/depth.h"
@@ -114,19 +115,21 @@ void WritePlan(const Workspace& ws, const RunOptions& o, const Plan& plan,
 }  // namespace
 
 std::string RunSummary::BriefReport() const {
-  char buffer[1024];
-  std::snprintf(buffer, sizeof(buffer),
-                "done in %.1f s; the report is %s", seconds,
-                (report.dir / "index.md").c_str());
-  return buffer;
+  return StringPrintf("done in %.1f s; the report is %s", seconds,
+                      (report.dir / "index.md").c_str());
 }
 
 nlohmann::json RunOptions::ToJson() const {
-  return {{"video", video.string()},       {"images", images.string()},
-          {"colmap", colmap.string()},     {"dataset", dataset.string()},
-          {"workspace", workspace.string()}, {"eval", eval},
-          {"factor", factor},              {"holdout", holdout},
-          {"max_size", max_size},          {"fit", fit.ToJson()}};
+  return {{"video", video.string()},
+          {"images", images.string()},
+          {"colmap", colmap.string()},
+          {"dataset", dataset.string()},
+          {"workspace", workspace.string()},
+          {"eval", eval},
+          {"factor", factor},
+          {"holdout", holdout},
+          {"max_size", max_size},
+          {"fit", fit.ToJson()}};
 }
 
 PlanFacts GatherFacts(const RunOptions& o) {
@@ -280,13 +283,12 @@ RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
   summary.plan = plan;
   summary.seconds = total.WallSeconds();
   if (progress) {
-    char line[1024];
-    std::snprintf(line, sizeof(line),
-                  "pano4d run: done in %.1f s; plan and stage times in %s, "
-                  "the report in %s\n",
-                  summary.seconds, ws.plan_json().c_str(),
-                  (summary.report.dir / "index.md").c_str());
-    *progress << line << std::flush;
+    *progress << StringPrintf(
+                     "pano4d run: done in %.1f s; plan and stage times in "
+                     "%s, the report in %s\n",
+                     summary.seconds, ws.plan_json().c_str(),
+                     (summary.report.dir / "index.md").c_str())
+              << std::flush;
   }
   return summary;
 }

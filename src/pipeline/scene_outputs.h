@@ -51,5 +51,4 @@ bool WriteVideo(const std::filesystem::path& path,
                 const std::vector<cv::Mat>& frames, double fps,
                 std::vector<std::string>* notes);
 
-
 }  // namespace pano4d

@@ -8,17 +8,12 @@
 #include "colmap_ext/model.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
+#include "src/core/strings.h"
 #include "src/datasets/dataset.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
-
-std::string Format(const char* format, auto... args) {
-  char buffer[1024];
-  std::snprintf(buffer, sizeof(buffer), format, args...);
-  return buffer;
-}
 
 SfmComparison CompareWithDataset(const fs::path& model_dir,
                                  const fs::path& root) {
@@ -55,22 +50,21 @@ SfmComparison CompareWithDataset(const fs::path& model_dir,
 std::string SfmComparison::BriefReport() const {
   const TrajectoryErrors& e = errors;
   const double extent = scene_extent;
-  return Format(
+  return StringPrintf(
       "against %s: %d cameras matched, Sim(3) scale %.4g\n"
       "  ATE (camera centres): rmse %.4g, mean %.4g, median %.4g, max %.4g "
       "(scene extent %.4g, the sparse points' middle-90%% box: rmse = "
       "%.3f%%)\n"
       "  RPE (consecutive): translation rmse %.4g, rotation rmse %.4g deg\n",
       dataset.c_str(), e.cameras, e.reference_from_estimate.scale, e.ate_rmse,
-      e.ate_mean,
-      e.ate_median, e.ate_max, extent,
+      e.ate_mean, e.ate_median, e.ate_max, extent,
       extent > 0 ? 100 * e.ate_rmse / extent : 0.0, e.rpe_translation_rmse,
       e.rpe_rotation_rmse_deg);
 }
 
 std::string SfmStageSummary::FullReport() const {
   const SfmReport& r = report;
-  std::string s = Format(
+  std::string s = StringPrintf(
       "pano4d sfm: %d of %d frames registered (%.1f%%), %d points, mean "
       "reprojection error %.3f px, %d model(s)\n"
       "  model: %s\n  images: %s\n",
@@ -78,8 +72,8 @@ std::string SfmStageSummary::FullReport() const {
       r.points3D, r.mean_reprojection_error, r.models, r.model.c_str(),
       r.images.c_str());
   for (const SfmStepReport& step : r.steps) {
-    s += Format("  %-20s %8.1f s%s\n", step.step.c_str(), step.seconds,
-                step.skipped ? "  (complete from an earlier run)" : "");
+    s += StringPrintf("  %-20s %8.1f s%s\n", step.step.c_str(), step.seconds,
+                      step.skipped ? "  (complete from an earlier run)" : "");
   }
   if (comparison) s += "  " + comparison->BriefReport();
   return s;

@@ -10,11 +10,11 @@
 
 #include <gtest/gtest.h>
 
-#include "src/datasets/dycheck_dataset.h"
 #include "src/core/camera.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/version.h"
+#include "src/datasets/dycheck_dataset.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d::cli {

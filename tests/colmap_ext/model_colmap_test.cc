@@ -145,9 +145,10 @@ void OrderLike(std::vector<T>& list, const std::vector<T>& reference,
   // over-alignment of the Eigen members.
   std::vector<std::size_t> order(list.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return rank.at(id(list[a])) < rank.at(id(list[b]));
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) {
+                     return rank.at(id(list[a])) < rank.at(id(list[b]));
+                   });
   std::vector<T> sorted;
   for (std::size_t i : order) sorted.push_back(list[i]);
   list = std::move(sorted);

@@ -10,11 +10,11 @@
 #include "colmap_ext/alignment.h"
 #include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/model.h"
-#include "src/datasets/dataset.h"
-#include "src/datasets/synth_generate.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
+#include "src/datasets/dataset.h"
+#include "src/datasets/synth_generate.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {

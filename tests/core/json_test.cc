@@ -87,7 +87,8 @@ TEST(JsonTest, FirstDifferenceNamesTheKeyPath) {
   ASSERT_TRUE(missing);
   EXPECT_EQ(missing->path, "seed");
   EXPECT_TRUE(missing->second.is_null());
-  const std::optional<JsonDifference> whole = FirstDifference(Json(1), Json("1"));
+  const std::optional<JsonDifference> whole =
+      FirstDifference(Json(1), Json("1"));
   ASSERT_TRUE(whole);
   EXPECT_EQ(whole->path, "");
 }

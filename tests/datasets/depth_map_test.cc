@@ -12,7 +12,9 @@
 namespace pano4d {
 namespace {
 
-Camera Pinhole() { return Camera{CameraModelId::kPinhole, 40, 30, {30, 32, 20, 15}}; }
+Camera Pinhole() {
+  return Camera{CameraModelId::kPinhole, 40, 30, {30, 32, 20, 15}};
+}
 
 // A plane at z = 2 as Kubric stores it (distance along each ray) reads
 // back as z = 2 everywhere.

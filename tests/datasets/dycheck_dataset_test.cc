@@ -4,9 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include "src/datasets/dataset.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/datasets/dataset.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {

@@ -4,14 +4,14 @@
 
 #include <gtest/gtest.h>
 
-#include "src/datasets/dataset.h"
-#include "src/datasets/synth_cameras.h"
-#include "src/datasets/synth_render.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/npy.h"
+#include "src/datasets/dataset.h"
+#include "src/datasets/synth_cameras.h"
+#include "src/datasets/synth_render.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d::synth {

@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "src/datasets/synth_generate.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
+#include "src/datasets/synth_generate.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {

@@ -5,10 +5,10 @@
 #include <cstdint>
 #include <string_view>
 
-#include "src/datasets/dycheck_camera.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/datasets/dycheck_camera.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
                                       std::size_t size) {

@@ -3,9 +3,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "src/datasets/nvidia_dataset.h"
 #include "src/core/error.h"
 #include "src/core/npy.h"
+#include "src/datasets/nvidia_dataset.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
                                       std::size_t size) {

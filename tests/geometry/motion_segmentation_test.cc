@@ -11,10 +11,10 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "src/datasets/synth_generate.h"
-#include "src/datasets/synth_render.h"
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/datasets/synth_generate.h"
+#include "src/datasets/synth_render.h"
 #include "tests/support/synth_video.h"
 #include "tests/support/test_files.h"
 

@@ -2,8 +2,8 @@
 
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "src/core/error.h"
 
@@ -24,11 +24,10 @@ PosedCamera At(double x, double yaw_degrees = 0.0) {
 // At median depth 1 the baseline is the ratio: the neighbours are those
 // nearest 0.08 on a log scale, never one too close or looking away.
 TEST(StereoNeighboursTest, BaselineNearestTheRatioFirst) {
-  const std::vector<PosedCamera> cameras = {
-      At(0.0),  At(0.005),      At(0.05), At(0.08),
-      At(0.16), At(0.08, 90.0), At(0.5)};
-  const std::vector<std::size_t> all =
-      SelectStereoNeighbours(cameras, 0, 1.0);
+  const std::vector<PosedCamera> cameras = {At(0.0),  At(0.005), At(0.05),
+                                            At(0.08), At(0.16),  At(0.08, 90.0),
+                                            At(0.5)};
+  const std::vector<std::size_t> all = SelectStereoNeighbours(cameras, 0, 1.0);
   EXPECT_EQ(all, (std::vector<std::size_t>{3, 2, 4, 6}));
   StereoNeighbourOptions two;
   two.neighbours = 2;
@@ -47,8 +46,8 @@ TEST(StereoNeighboursTest, RangeFromTheSparsePoints) {
   for (int i = 100; i >= 1; --i) z.push_back(i);  // any order
   const std::optional<StereoRange> r = StereoRangeOf(z);
   ASSERT_TRUE(r);
-  EXPECT_DOUBLE_EQ(r->near, kStereoNearMargin * 3);   // the 2nd percentile
-  EXPECT_DOUBLE_EQ(r->far, kStereoFarMargin * 99);    // the 98th
+  EXPECT_DOUBLE_EQ(r->near, kStereoNearMargin * 3);  // the 2nd percentile
+  EXPECT_DOUBLE_EQ(r->far, kStereoFarMargin * 99);   // the 98th
   EXPECT_DOUBLE_EQ(r->median, 51);
   z.resize(kMinStereoPoints - 1);
   EXPECT_FALSE(StereoRangeOf(z));

@@ -118,7 +118,8 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   InitOptions options;
   options.dynamic_thickness = 0;
   InitReport report;
-  const GaussianScene scene = InitializeScene(views, kFrames, options, /*seed=*/0, &report);
+  const GaussianScene scene =
+      InitializeScene(views, kFrames, options, /*seed=*/0, &report);
   ASSERT_GT(scene.dynamics.size(), 0u);
   ASSERT_TRUE(scene.has_motion());
   EXPECT_EQ(scene.canonical_time, kFrames / 2);
@@ -131,7 +132,8 @@ TEST(InitTest, InitialMotionCarriesTheMovingObjectsThroughTheClip) {
   RecordProperty("floating", std::to_string(c.floating));
   // Measured: 0.933 covered, 0.203 floating (identity bases: 0.424 and
   // 0.599). The floaters are the tracks' drift far from the canonical time
-  // (docs/ARCHITECTURE.md, "Moving pixels"), which the fit corrects only in
+  // (docs/experiments/2026-11-23-moving-pixels-diagnosis.md), which the fit
+  // corrects only in
   // part. With the flow stopped at half resolution (OpenCV DIS's preset)
   // the tracks drifted more: 0.918 and 0.257, which the floating bound
   // fails.

@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
-#include "src/core/image.h"
 #include "src/core/file.h"
+#include "src/core/image.h"
 #include "src/gs/surface_loss.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
@@ -250,7 +250,8 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   }
   for (float v : trainer.scene().statics.means) ASSERT_TRUE(std::isfinite(v));
   trainer.SaveCheckpoint(dir / "a.ckpt");
-  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options, /*seed=*/0);
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options,
+                  /*seed=*/0);
   resumed.LoadCheckpoint(dir / "a.ckpt");
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   GaussianModel wrong_degree = extra;
@@ -332,7 +333,8 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
   }
   EXPECT_GT(trainer.densified_total(), 0);
   trainer.SaveCheckpoint(dir / "a.ckpt");
-  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options, /*seed=*/0);
+  Trainer resumed(ReadCheckpointScene(dir / "a.ckpt"), views, options,
+                  /*seed=*/0);
   resumed.LoadCheckpoint(dir / "a.ckpt");
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   EXPECT_THROW(trainer.RemoveStaticGaussians(std::vector<std::uint8_t>(3, 1)),

@@ -465,8 +465,8 @@ TEST(ExpansionTest, OptionsAreChecked) {
   o.refine_outside_weight = -0.5;
   EXPECT_THROW(o.Check(), Error);
   GeometryPrior prior;
-  EXPECT_THROW(Expansion(ExpansionOptions(), /*seed=*/0, "/tmp/unused", nullptr),
-               Error);
+  EXPECT_THROW(
+      Expansion(ExpansionOptions(), /*seed=*/0, "/tmp/unused", nullptr), Error);
 }
 
 }  // namespace

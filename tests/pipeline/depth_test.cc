@@ -160,7 +160,8 @@ TEST_F(DepthStageTest, BadOptionsAreRefusedBeforeAnyWork) {
   EXPECT_THROW(RunDepth(Workspace(dir_->path() / "bad"), o), Error);
   EXPECT_FALSE(fs::exists(dir_->path() / "bad"));
   o.holdout = 0;
-  EXPECT_THROW(RunDepth(Workspace(dir_->path() / "bad"), o), Error);  // no sfm.json
+  EXPECT_THROW(RunDepth(Workspace(dir_->path() / "bad"), o),
+               Error);  // no sfm.json
 }
 
 }  // namespace

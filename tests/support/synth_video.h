@@ -3,10 +3,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "src/core/posed_camera.h"
 #include "src/datasets/synth_cameras.h"
 #include "src/datasets/synth_render.h"
 #include "src/datasets/synth_scene.h"
-#include "src/core/posed_camera.h"
 
 namespace pano4d::testing {
 
