@@ -35,7 +35,7 @@ struct EvaluationResult {
   std::string dataset;  // root folder
   std::string kind;
   std::string split;
-  int factor = 2;
+  int factor = kEvaluationFactor;
   std::vector<FrameMetrics> frames;
   MetricRow mean;                              // plain mean over defined frames
   std::array<int, kNumMetrics> frames_used{};  // frames each mean is over

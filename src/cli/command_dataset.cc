@@ -15,7 +15,7 @@ namespace {
 
 struct DatasetInfoOptions {
   std::string root;
-  int factor = 2;
+  int factor = kEvaluationFactor;
 };
 
 int RunDatasetInfo(const DatasetInfoOptions& options) {

@@ -18,7 +18,7 @@ void AddRunCommand(CLI::App& app, Action* action) {
       "Plan and run every stage on a video, images, COLMAP workspace or "
       "dataset: the plan says which stages run, which are left out and why");
   auto* input = sub->add_option_group("input", "exactly one of");
-  AddFramesInputOptions(input, &o->video, &o->images);
+  AddFramesInputOptions(input, &o->sfm.video, &o->sfm.images);
   input
       ->add_option("--colmap", o->colmap,
                    "A COLMAP workspace with a model (poses given); it is "
@@ -30,9 +30,9 @@ void AddRunCommand(CLI::App& app, Action* action) {
   sub->add_flag("--eval", o->eval,
                 "Evaluate the validation renders (DyCheck metrics) when the "
                 "input has ground truth");
-  AddFactorOption(sub, &o->factor);
-  AddHoldoutOption(sub, &o->holdout);
-  AddMaxSizeOption(sub, &o->max_size);
+  AddFactorOption(sub, &o->depth.factor);
+  AddHoldoutOption(sub, &o->depth.holdout);
+  AddMaxSizeOption(sub, &o->sfm.max_size);
   AddFitOptions(sub, &o->fit);
   sub->footer(
       "Writes WS/pano4d/plan.json (the plan, the facts it was made from, and "

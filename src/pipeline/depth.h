@@ -14,6 +14,7 @@
 
 #include "src/core/frames.h"
 #include "src/core/workspace.h"
+#include "src/datasets/dataset.h"
 #include "src/geometry/stereo.h"
 #include "src/geometry/stereo_neighbours.h"
 
@@ -22,7 +23,7 @@ namespace pano4d {
 struct DepthOptions {
   std::filesystem::path dataset;    // empty: the workspace's COLMAP model
   std::filesystem::path depth_dir;  // <frame>.npy/.png/.tiff/.exr; empty: none
-  int factor = 2;   // a dataset's resolution divisor (DyCheck evaluates at 2)
+  int factor = kEvaluationFactor;   // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side
   // (time; the fit's frames are usually smaller).

@@ -110,6 +110,97 @@ struct ExpansionState {
   nlohmann::json steps = nlohmann::json::array();
 };
 
+// The expansion: on unless expand is false; a run too short for one says
+// so. A resumed run reloads the steps before its checkpoint; those the
+// interrupted run did after it run again.
+ExpansionState StartExpansion(const Workspace& ws, const FitOptions& o,
+                              bool resuming, Trainer* trainer,
+                              FitSummary* summary) {
+  ExpansionState ex;
+  const int iterations = o.trainer.iterations;
+  if (!o.expand) {
+    summary->no_expansion_reason = "--no-expansion";
+    return ex;
+  }
+  PANO4D_LOG(kInfo) << "fit: expansion warps with "
+                    << WarpDepthName(o.expansion.warp_depth) << " depth";
+  if (iterations <= o.expansion.every) {
+    summary->no_expansion_reason = "run too short";
+    PANO4D_LOG(kInfo) << "fit: no expansion: " << iterations
+                      << " iterations leave no room for one every "
+                      << o.expansion.every << " (--expand-every)";
+    return ex;
+  }
+  const fs::path dir = ws.expansion();
+  EnsureDirectory(dir);
+  ex.prior = MakePrior(o.prior_cmd, dir / "prior");
+  ex.expansion =
+      std::make_unique<Expansion>(o.expansion, o.seed, dir, ex.prior.get());
+  if (resuming) {
+    const fs::path steps_path = dir / "steps.json";
+    const int last =
+        LastStepBefore(o.expansion, summary->resumed_at, iterations);
+    if (fs::exists(steps_path)) {
+      for (const auto& step : ReadJson(steps_path))
+        if (GetJson<int>(step, "step", steps_path.string()) <= last)
+          ex.steps.push_back(step);
+    }
+    ex.expansion->Reload(*trainer, last);
+  }
+  trainer->extra_view = [e = ex.expansion.get()](std::int64_t it) {
+    return e->ViewFor(it);
+  };
+  summary->expanded = true;
+  return ex;
+}
+
+// Validation renders (and their depth), scored with `pano4d eval`'s code
+// when the inputs came from frames.json. The ablation without Gaussian
+// refinement scores the panorama results instead.
+void WriteValidation(const Workspace& ws, const FitOptions& o,
+                     const FitInputs& inputs, Trainer* trainer,
+                     Expansion* expansion, FitSummary* summary) {
+  const std::vector<ValidationView>& val = inputs.val;
+  summary->panorama_only = expansion && !o.expansion.gaussian_refinement &&
+                           !expansion->cameras().empty();
+  if (val.empty()) return;
+  RenderOutput out;
+  for (const ValidationView& v : val) {
+    trainer->Render(v.camera, v.time, &out);
+    WriteNpy(ws.val_depth_renders() / (v.name + ".npy"),
+             NpyArray::FromFloats({out.height, out.width}, out.depth));
+    if (!summary->panorama_only)
+      WriteImage(ws.val_renders() / (v.name + ".png"), ToImage(out));
+  }
+  if (summary->panorama_only)
+    WritePanoramaResults(trainer, expansion, val, ws.val_renders());
+  if (inputs.frames) {
+    summary->evaluation = EvaluateRenders(ValidationDataset(ws, *inputs.frames),
+                                          ws.val_renders(), {});
+    WriteEvaluation(*summary->evaluation, ws.metrics(), DatasetsMetaDir());
+  }
+}
+
+// What the trainer and the expansion did, into the summary.
+void Summarise(const Trainer& trainer, const ExpansionState& ex,
+               FitSummary* summary) {
+  const GaussianScene& s = trainer.scene();
+  summary->iterations = trainer.iteration();
+  summary->static_gaussians = s.statics.size();
+  summary->dynamic_gaussians = s.dynamics.size();
+  summary->motion_bases = s.bases.num_bases;
+  summary->densified = trainer.densified_total();
+  summary->pruned = trainer.pruned_total();
+  summary->skipped_rows = trainer.skipped_rows_total();
+  summary->skipped_steps = trainer.skipped_steps_total();
+  summary->seconds.trainer = trainer.times();
+  if (ex.expansion) {
+    summary->expansion_steps = ex.steps;
+    summary->carved = ex.expansion->carved();
+    summary->refinement_views = ex.expansion->refinement_views();
+  }
+}
+
 }  // namespace
 
 FitInputs LoadFitInputs(const Workspace& ws) {
@@ -234,44 +325,8 @@ FitSummary FitController::Run() {
                       << " at iteration " << summary.resumed_at;
   }
 
-  // The expansion: on unless expand is false; a run too short for one says
-  // so.
-  ExpansionState ex;
+  ExpansionState ex = StartExpansion(ws, o, resuming, &trainer, &summary);
   const int iterations = o.trainer.iterations;
-  if (!o.expand) {
-    summary.no_expansion_reason = "--no-expansion";
-  } else {
-    PANO4D_LOG(kInfo) << "fit: expansion warps with "
-                      << WarpDepthName(o.expansion.warp_depth) << " depth";
-    if (iterations <= o.expansion.every) {
-      summary.no_expansion_reason = "run too short";
-      PANO4D_LOG(kInfo) << "fit: no expansion: " << iterations
-                        << " iterations leave no room for one every "
-                        << o.expansion.every << " (--expand-every)";
-    } else {
-      const fs::path dir = ws.expansion();
-      EnsureDirectory(dir);
-      ex.prior = MakePrior(o.prior_cmd, dir / "prior");
-      ex.expansion =
-          std::make_unique<Expansion>(o.expansion, o.seed, dir, ex.prior.get());
-      if (resuming) {
-        const fs::path steps_path = dir / "steps.json";
-        const int last =
-            LastStepBefore(o.expansion, summary.resumed_at, iterations);
-        // Steps the interrupted run did after its checkpoint run again.
-        if (fs::exists(steps_path)) {
-          for (const auto& step : ReadJson(steps_path))
-            if (GetJson<int>(step, "step", steps_path.string()) <= last)
-              ex.steps.push_back(step);
-        }
-        ex.expansion->Reload(trainer, last);
-      }
-      trainer.extra_view = [e = ex.expansion.get()](std::int64_t it) {
-        return e->ViewFor(it);
-      };
-    }
-  }
-  summary.expanded = ex.expansion != nullptr;
 
   const std::vector<ValidationView>& val = inputs_.val;
   RunRecorder recorder(ws.fit_csv(), "fit",
@@ -350,27 +405,7 @@ FitSummary FitController::Run() {
   }
   summary.train_psnr = TrainPsnr(&trainer);
 
-  // Validation renders, scored with `pano4d eval`'s code. The ablation
-  // without Gaussian refinement scores the panorama results instead.
-  summary.panorama_only = ex.expansion && !o.expansion.gaussian_refinement &&
-                          !ex.expansion->cameras().empty();
-  if (!val.empty()) {
-    RenderOutput out;
-    for (const ValidationView& v : val) {
-      trainer.Render(v.camera, v.time, &out);
-      WriteNpy(ws.val_depth_renders() / (v.name + ".npy"),
-               NpyArray::FromFloats({out.height, out.width}, out.depth));
-      if (!summary.panorama_only)
-        WriteImage(ws.val_renders() / (v.name + ".png"), ToImage(out));
-    }
-    if (summary.panorama_only)
-      WritePanoramaResults(&trainer, ex.expansion.get(), val, ws.val_renders());
-    if (inputs_.frames) {
-      summary.evaluation = EvaluateRenders(
-          ValidationDataset(ws, *inputs_.frames), ws.val_renders(), {});
-      WriteEvaluation(*summary.evaluation, ws.metrics(), DatasetsMetaDir());
-    }
-  }
+  WriteValidation(ws, o, inputs_, &trainer, ex.expansion.get(), &summary);
   try {
     PlotRunLog(ws.fit_csv(), ws.fit_plot(),
                {"train_psnr", "val_psnr", "val_mpsnr", "val_upsnr"},
@@ -379,21 +414,7 @@ FitSummary FitController::Run() {
     PANO4D_LOG(kWarning) << "fit: no plot: " << e.what();
   }
 
-  const GaussianScene& s = trainer.scene();
-  summary.iterations = trainer.iteration();
-  summary.static_gaussians = s.statics.size();
-  summary.dynamic_gaussians = s.dynamics.size();
-  summary.motion_bases = s.bases.num_bases;
-  summary.densified = trainer.densified_total();
-  summary.pruned = trainer.pruned_total();
-  summary.skipped_rows = trainer.skipped_rows_total();
-  summary.skipped_steps = trainer.skipped_steps_total();
-  summary.seconds.trainer = trainer.times();
-  if (ex.expansion) {
-    summary.expansion_steps = ex.steps;
-    summary.carved = ex.expansion->carved();
-    summary.refinement_views = ex.expansion->refinement_views();
-  }
+  Summarise(trainer, ex, &summary);
   summary.seconds.total = total.WallSeconds();
   WriteJson(ws.fit_json(), summary.ToJson());
   return summary;

@@ -70,6 +70,7 @@ class FitController {
   // and writes fit.json, the run log and its plot, the validation renders
   // and metrics, and the expansion's products. Throws pano4d::Error on bad
   // input or when a checkpoint to resume from does not match the options.
+  // Call it once: the training views move into the trainer.
   FitSummary Run();
 
   // Asks a running Run() to checkpoint and return after the current

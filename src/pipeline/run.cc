@@ -99,7 +99,7 @@ bool FramesFromThisInput(const Workspace& ws, const RunOptions& o) {
   if (!fs::exists(ws.frames_json())) return false;
   const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
   if (o.dataset.empty()) return true;
-  return frames.dataset_factor == o.factor &&
+  return frames.dataset_factor == o.depth.factor &&
          fs::weakly_canonical(frames.dataset) ==
              fs::weakly_canonical(o.dataset);
 }
@@ -120,15 +120,12 @@ std::string RunSummary::BriefReport() const {
 }
 
 nlohmann::json RunOptions::ToJson() const {
-  return {{"video", video.string()},
-          {"images", images.string()},
-          {"colmap", colmap.string()},
+  return {{"colmap", colmap.string()},
           {"dataset", dataset.string()},
           {"workspace", workspace.string()},
           {"eval", eval},
-          {"factor", factor},
-          {"holdout", holdout},
-          {"max_size", max_size},
+          {"sfm", sfm.ToJson()},
+          {"depth", depth.ToJson()},
           {"fit", fit.ToJson()}};
 }
 
@@ -140,7 +137,7 @@ PlanFacts GatherFacts(const RunOptions& o) {
   if (!o.dataset.empty()) {
     f.input = InputKind::kDataset;
     f.input_path = o.dataset.string();
-    const Dataset d = LoadDataset(o.dataset, o.factor);
+    const Dataset d = LoadDataset(o.dataset, o.depth.factor);
     f.poses_given = true;
     f.depth_given = !d.train.empty();
     for (const DatasetFrame& frame : d.train)
@@ -153,8 +150,9 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.input_path = o.colmap.string();
     f.poses_given = true;
   } else {
-    f.input = o.video.empty() ? InputKind::kImages : InputKind::kVideo;
-    f.input_path = (o.video.empty() ? o.images : o.video).string();
+    const SfmOptions& s = o.sfm;
+    f.input = s.video.empty() ? InputKind::kImages : InputKind::kVideo;
+    f.input_path = (s.video.empty() ? s.images : s.video).string();
   }
   // A workspace that an earlier run took through depth already knows.
   const Workspace ws(o.workspace);
@@ -163,14 +161,17 @@ PlanFacts GatherFacts(const RunOptions& o) {
   return f;
 }
 
-RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
-  const int inputs = !o.video.empty() + !o.images.empty() + !o.colmap.empty() +
-                     !o.dataset.empty();
+RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
+  RunOptions o = given;
+  // A COLMAP workspace is the workspace.
+  if (o.workspace.empty()) o.workspace = o.colmap;
+  const int inputs = !o.sfm.video.empty() + !o.sfm.images.empty() +
+                     !o.colmap.empty() + !o.dataset.empty();
   if (inputs != 1) {
     throw Error("pano4d run", "input", std::to_string(inputs) + " given",
                 "give exactly one of --video, --images, --colmap, --dataset");
   }
-  const Workspace ws(o.workspace.empty() ? o.colmap : o.workspace);
+  const Workspace ws(o.workspace);
   if (ws.root().empty()) {
     throw Error("--workspace", "", "",
                 "required (except with --colmap, whose folder is the "
@@ -185,9 +186,7 @@ RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
   o.fit.Check();
   EnsureDirectory(ws.pano4d());
   if (!o.colmap.empty()) AdoptColmapWorkspace(ws);
-  RunOptions with_ws = o;
-  with_ws.workspace = ws.root();
-  PlanFacts facts = GatherFacts(with_ws);
+  PlanFacts facts = GatherFacts(o);
   Plan plan = MakePlan(facts);
   if (progress) *progress << plan.Table() << std::flush;
   if (!o.dataset.empty() && plan.Runs("depth")) {
@@ -214,10 +213,8 @@ RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
   if (plan.Runs("sfm")) {
     stage("sfm", [&] {
       SfmStageOptions s;
+      s.sfm = o.sfm;
       s.sfm.workspace = ws.root();
-      s.sfm.video = o.video;
-      s.sfm.images = o.images;
-      s.sfm.max_size = o.max_size;
       s.dataset = o.dataset;
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
@@ -227,9 +224,7 @@ RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
   stage("depth", [&] {
     if (FramesFromThisInput(ws, o))
       return std::string("complete from an earlier run");
-    DepthOptions d;
-    d.factor = o.factor;
-    d.holdout = o.holdout;
+    DepthOptions d = o.depth;
     d.dataset = o.dataset;
     const DepthSummary r = RunDepth(ws, d);
     PANO4D_LOG(kInfo) << "depth: " << r.BriefReport();
@@ -270,7 +265,7 @@ RunSummary RunPipeline(const RunOptions& o, std::ostream* progress) {
       e.dataset = o.dataset;
       e.renders = ws.val_renders();
       e.out = ws.metrics();
-      e.factor = o.factor;
+      e.factor = o.depth.factor;
       const EvalSummary r = RunEval(e);
       if (progress) {
         *progress << r.markdown << "\nwritten to " << r.out.string()

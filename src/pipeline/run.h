@@ -10,7 +10,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "colmap_ext/sfm.h"
 #include "src/core/workspace.h"
+#include "src/pipeline/depth.h"
 #include "src/pipeline/fit_options.h"
 #include "src/pipeline/planner.h"
 #include "src/pipeline/report.h"
@@ -18,15 +20,17 @@
 namespace pano4d {
 
 struct RunOptions {
-  // The input: exactly one of these.
-  std::filesystem::path video, images, colmap, dataset;
+  // The input: exactly one of sfm.video, sfm.images, colmap, dataset.
+  std::filesystem::path colmap, dataset;
   std::filesystem::path workspace;  // with colmap: empty or the same folder
   bool eval = false;  // DyCheck metrics when the input has ground truth
-  int factor = 2;     // a dataset's resolution divisor
-  int holdout = 0;    // video/images: every N-th frame held out (0: none)
-  int max_size = 0;   // video/images: longest side for SfM (0: as is)
-  // The fit's options: init.num_bases = 0 and expand = false are the
-  // user's word; the plan may leave motion or expansion out as well.
+  // The stages' own options, as their commands take them: sfm (video,
+  // images, max_size; its workspace is run's), depth (factor, holdout; its
+  // dataset is run's) and the fit, whose init.num_bases = 0 and expand =
+  // false are the user's word (the plan may leave motion or expansion out
+  // as well).
+  SfmOptions sfm;
+  DepthOptions depth;
   FitOptions fit;
   nlohmann::json ToJson() const;  // plan.json's "options"
 };

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "src/render/sh.h"
+
 namespace pano4d {
 namespace {
 
@@ -110,7 +112,7 @@ TEST(PanoramaTest, GaussiansSplatWithTheirDcColour) {
   m.log_scales = {std::log(0.2f), std::log(0.2f), std::log(0.2f)};
   m.quats = {1, 0, 0, 0};
   m.opacities = {0};
-  m.sh = {(0.8f - 0.5f) / 0.28209479177387814f, 0, 0};
+  m.sh = {(0.8f - 0.5f) / static_cast<float>(kShC0), 0, 0};
   const PanoramaImage image = SplatGaussians(p, m);
   const std::size_t centre = 16 * 64 + 32;
   EXPECT_NEAR(image.rgb[3 * centre], 0.8f, 1e-6);
