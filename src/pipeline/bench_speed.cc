@@ -9,6 +9,7 @@
 #include "src/core/camera_check.h"
 #include "src/core/error.h"
 #include "src/core/frames.h"
+#include "src/core/median.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/core/version.h"
@@ -77,11 +78,6 @@ double NanosecondsPerCall(double min_seconds, std::int64_t calls_per_body,
   }
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
 // The fitted scene of a workspace (`pano4d fit`'s checkpoint) rendered
 // from its training cameras at their times, one camera per run, cycling.
 BenchResult BenchFittedScene(const BenchRenderOptions& options) {
@@ -120,8 +116,8 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
     rasterizer.ProjectBackward(model, cameras[v], grad2d, &grad);
     backward_ms.push_back(1e3 * backward.WallSeconds());
   }
-  const double f = Median(forward_ms), b = Median(backward_ms),
-               c = Median(compose_ms);
+  const double f = UpperMedian(forward_ms), b = UpperMedian(backward_ms),
+               c = UpperMedian(compose_ms);
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
   result.rows.push_back({{"workspace", ws.root().string()},
@@ -245,7 +241,7 @@ BenchResult RunBenchRender(const BenchRenderOptions& options) {
         rasterizer.Forward(model, camera, {}, &out);
         ms.push_back(1e3 * timer.WallSeconds());
       }
-      const double forward_ms = Median(ms);
+      const double forward_ms = UpperMedian(ms);
       const RasterStats stats = rasterizer.stats();
       // Forward + backward with a fixed gradient on every output, as a
       // photometric loss would give.
@@ -261,7 +257,7 @@ BenchResult RunBenchRender(const BenchRenderOptions& options) {
         rasterizer.ProjectBackward(model, camera, grad2d, &grad);
         ms_fb.push_back(1e3 * timer.WallSeconds());
       }
-      const double forward_backward_ms = Median(ms_fb);
+      const double forward_backward_ms = UpperMedian(ms_fb);
       const double evals_per_s = stats.pixel_evaluations / (forward_ms * 1e-3);
       result.rows.push_back({{"gaussians", n},
                              {"width", width},

@@ -294,9 +294,8 @@ ValidationView ToValidation(const TrainingView& v) {
   out.name = v.name;
   out.time = v.time;
   out.camera = v.camera;
-  cv::Mat rgb(v.camera.height, v.camera.width, CV_32FC3);
-  std::copy(v.rgb.begin(), v.rgb.end(), rgb.ptr<float>());
-  out.rgb = Image::FromRgb32f(rgb);
+  out.rgb = Image::FromRgb32f(
+      MatView(v.rgb, v.camera.height, v.camera.width, 3).clone());
   return out;
 }
 

@@ -49,11 +49,11 @@ ExpandSummary RunExpand(const Workspace& ws, const ExpandOptions& options) {
                     "--expansion-steps to go further");
   }
   options.fit.expansion.Check();
-  FitInputs inputs = LoadFitInputs(ws);
-  FitOptions o = ResolveFitOptions(options.fit, inputs.depth_source);
+  const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
+  FitOptions o = ResolveFitOptions(options.fit, frames.depth_source);
   o.expansion.gaussian_refinement = true;  // placement is reported
-  const std::unique_ptr<Trainer> owned =
-      MakeFitTrainer(ReadCheckpointScene(ckpt), std::move(inputs.train), o);
+  const std::unique_ptr<Trainer> owned = MakeFitTrainer(
+      ReadCheckpointScene(ckpt), LoadTrainingViews(frames.train), o);
   Trainer& trainer = *owned;
   const std::unique_ptr<Prior> prior = MakePrior(o.prior_cmd, out / "prior");
   Expansion expansion(o.expansion, o.seed, out, prior.get());

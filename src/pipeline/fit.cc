@@ -68,10 +68,9 @@ std::vector<ValidationView> LoadValidation(
   return views;
 }
 
+// A view of a render's colours (valid until the next render into `out`).
 Image ToImage(const RenderOutput& out) {
-  cv::Mat mat(out.height, out.width, CV_32FC3);
-  std::copy(out.rgb.begin(), out.rgb.end(), mat.ptr<float>());
-  return Image::FromRgb32f(mat);
+  return Image::FromRgb32f(MatView(out.rgb, out.height, out.width, 3));
 }
 
 // Training-view PSNR over every training frame, quantised as the metrics.
@@ -81,9 +80,9 @@ double TrainPsnr(Trainer* trainer) {
   for (const TrainingView& v : trainer->views()) {
     trainer->Render(v.camera, v.time, &out);
     const cv::Mat a = QuantizeForMetrics(ToImage(out), v.name);
-    cv::Mat target(v.camera.height, v.camera.width, CV_32FC3);
-    std::copy(v.rgb.begin(), v.rgb.end(), target.ptr<float>());
-    const cv::Mat b = QuantizeForMetrics(Image::FromRgb32f(target), v.name);
+    const cv::Mat b = QuantizeForMetrics(
+        Image::FromRgb32f(MatView(v.rgb, v.camera.height, v.camera.width, 3)),
+        v.name);
     sum += Psnr(a, b).value_or(0.0);
   }
   return sum / static_cast<double>(trainer->views().size());
@@ -194,6 +193,7 @@ void Summarise(const Trainer& trainer, const ExpansionState& ex,
   summary->skipped_rows = trainer.skipped_rows_total();
   summary->skipped_steps = trainer.skipped_steps_total();
   summary->seconds.trainer = trainer.times();
+  summary->trainer_options = trainer.options();
   if (ex.expansion) {
     summary->expansion_steps = ex.steps;
     summary->carved = ex.expansion->carved();

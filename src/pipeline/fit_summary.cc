@@ -110,10 +110,6 @@ nlohmann::json FitSummary::ToJson() const {
   const PhaseTimes& t = seconds.trainer;
   nlohmann::json metrics;
   if (evaluation) metrics = EvaluationJson(*evaluation).value("mean", metrics);
-  // The trainer's options as it ran them: densify_until resolved.
-  nlohmann::json trainer = used.trainer.ToJson();
-  if (used.trainer.densify_until < 0)
-    trainer["densify_until"] = used.trainer.iterations / 2;
   return {
       {"iterations", iterations},
       {"termination", FitTerminationName(termination)},
@@ -150,7 +146,7 @@ nlohmann::json FitSummary::ToJson() const {
                         : nlohmann::json()},
       {"final_loss", last_step.loss},
       {"train_psnr", train_psnr},
-      {"options", trainer},
+      {"options", trainer_options.ToJson()},
       {"options_given", given.ToJson()},
       {"options_used", used.ToJson()},
       {"metrics", metrics}};

@@ -62,6 +62,8 @@ struct FitSummary {
   // --no-gaussian-refinement: validation scored the panorama results.
   bool panorama_only = false;
 
+  // The trainer's options as it ran them (densify_until resolved).
+  TrainerOptions trainer_options;
   StepReport last_step;
   double train_psnr = 0.0;  // over every training frame, quantised
   std::size_t train_frames = 0, val_frames = 0;
