@@ -5,11 +5,9 @@
 #include <string>
 #include <vector>
 
-namespace pano4d {
+#include "src/core/subprocess.h"
 
-// The first executable called `name` on PATH (as a shell would find it), or
-// nullopt.
-std::optional<std::filesystem::path> FindOnPath(const std::string& name);
+namespace pano4d {
 
 // What one finished colmap subcommand took.
 struct ColmapRun {
@@ -42,8 +40,5 @@ class ColmapRunner {
  private:
   std::filesystem::path executable_;
 };
-
-// The last `count` non-empty lines of a text file (for error messages).
-std::string LastLines(const std::filesystem::path& path, int count);
 
 }  // namespace pano4d

@@ -1,5 +1,6 @@
 #include "evaluation/evaluate.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -68,6 +69,47 @@ std::string BenchmarkFile(const std::string& kind) {
   return "";
 }
 
+// Letters and digits, lower case: "nvidia-balloon1" -> "nvidiaballoon1".
+std::string Normalised(const std::string& name) {
+  std::string out;
+  for (const char c : name)
+    if (std::isalnum(static_cast<unsigned char>(c)))
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+PublishedRow RowOf(const Json& row, const std::string& source, bool mean) {
+  PublishedRow r;
+  r.method = row.value("method", "?");
+  r.source = source;
+  r.mean = mean;
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    const char* key = kMetricKeys[k];
+    if (row.contains(key) && row[key].is_number())
+      r.values[k] = row[key].get<double>();
+  }
+  return r;
+}
+
+// The table rows for `rows`: the method, its source, then the nine columns.
+void AppendRows(std::ostringstream& out,
+                const std::vector<const PublishedRow*>& rows) {
+  for (const PublishedRow* row : rows) {
+    out << "| " << row->method << " (" << row->source << ") |";
+    for (std::size_t k = 0; k < 9; ++k) {
+      out << " "
+          << (row->values[k] ? Cell(row->values[k], FormatOf(k))
+                             : std::string("-"))
+          << " |";
+    }
+    out << "\n";
+  }
+}
+
+const char* kTableHead =
+    "| Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | mLPIPS | uPSNR | "
+    "uSSIM | uLPIPS |\n|---|---|---|---|---|---|---|---|---|---|\n";
+
 }  // namespace
 
 EvaluationResult EvaluateRenders(const Dataset& dataset,
@@ -108,6 +150,8 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
 
   EvaluationResult result;
   result.dataset = dataset.root.string();
+  result.scene = dataset.scene;
+  result.protocol = SplitDescription(dataset);
   result.kind = std::string(ToString(dataset.kind));
   result.split = options.split;
   result.factor = dataset.factor;
@@ -222,7 +266,8 @@ Json EvaluationJson(const EvaluationResult& r) {
     mean[kMetricKeys[k]] = Value(r.mean[k]);
     used[kMetricKeys[k]] = r.frames_used[k];
   }
-  return Json{{"dataset", r.dataset},      {"kind", r.kind},
+  return Json{{"dataset", r.dataset},      {"scene", r.scene},
+              {"protocol", r.protocol},    {"kind", r.kind},
               {"split", r.split},          {"factor", r.factor},
               {"frames", r.frames.size()}, {"mean", mean},
               {"frames_used", used},       {"notes", r.notes}};
@@ -242,49 +287,85 @@ std::string EvaluationCsv(const EvaluationResult& r) {
   return out.str();
 }
 
-std::string EvaluationMarkdown(const EvaluationResult& r, const Json& paper) {
+std::string EvaluationMarkdown(const EvaluationResult& r,
+                               const std::vector<PublishedRow>& published,
+                               bool benchmark_known) {
   std::ostringstream out;
-  out << "# pano4d evaluation: " << r.kind << ", split " << r.split << ", "
-      << r.frames.size() << " frames at " << r.factor << "x\n\n";
-  out << "| Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | mLPIPS | uPSNR | "
-         "uSSIM | uLPIPS |\n";
-  out << "|---|---|---|---|---|---|---|---|---|---|\n";
-  out << "| pano4d |";
+  out << "# pano4d evaluation: " << r.kind << " scene " << r.scene << ", split "
+      << r.split << ", " << r.frames.size() << " frames at " << r.factor
+      << "x\n\n"
+      << "Protocol: " << r.protocol << "\n\n";
+  std::vector<const PublishedRow*> scene_rows, mean_rows;
+  for (const PublishedRow& row : published)
+    (row.mean ? mean_rows : scene_rows).push_back(&row);
+  out << "## This scene\n\n" << kTableHead << "| pano4d |";
   for (std::size_t k = 0; k < 9; ++k)
     out << " " << Cell(r.mean[k], FormatOf(k)) << " |";
   out << "\n";
-  if (paper.is_object() && paper.contains("rows")) {
-    for (const Json& row : paper["rows"]) {
-      out << "| " << row.value("method", "?") << " (paper) |";
-      for (std::size_t k = 0; k < 9; ++k) {
-        const char* key = kMetricKeys[k];
-        std::optional<double> v;
-        if (row.contains(key) && row[key].is_number())
-          v = row[key].get<double>();
-        out << " " << (v ? Cell(v, FormatOf(k)) : std::string("-")) << " |";
-      }
-      out << "\n";
-    }
+  AppendRows(out, scene_rows);
+  if (scene_rows.empty())
+    out << "\nNo published per-scene rows for this scene in datasets_meta/.\n";
+  if (!mean_rows.empty()) {
+    out << "\n## Means over the benchmark's scenes (not comparable with one "
+           "scene's numbers)\n\n"
+        << kTableHead;
+    AppendRows(out, mean_rows);
   }
   out << "\nStrict masked SSIM (only windows that touch the mask): mSSIM "
       << Cell(r.mean[kMssimStrict], "%.3f") << ", uSSIM "
       << Cell(r.mean[kUssimStrict], "%.3f") << "\n\n";
   for (const std::string& note : r.notes) out << "- " << note << "\n";
-  if (!paper.is_object())
-    out << "- the paper's rows are unavailable (no datasets_meta file)\n";
+  if (!benchmark_known)
+    out << "- no published rows: datasets_meta/ has no file for this kind\n";
   return out.str();
+}
+
+Json BenchmarkMeta(const fs::path& datasets_meta, const std::string& kind) {
+  const std::string file = BenchmarkFile(kind);
+  if (file.empty() || !fs::exists(datasets_meta / file)) return Json();
+  return ReadJson(datasets_meta / file);
+}
+
+std::vector<PublishedRow> PublishedRows(const Json& benchmark,
+                                        const std::string& scene) {
+  std::vector<PublishedRow> rows;
+  if (!benchmark.is_object()) return rows;
+  const std::string name = Normalised(scene);
+  const Json sources = benchmark.value("per_scene_published", Json::array());
+  for (const Json& source : sources) {
+    // The source's first words name it in the table ("DynamicNeRF README").
+    std::string label = source.value("source", "published");
+    label = label.substr(0, label.find(" ("));
+    for (const auto& [key, list] :
+         source.value("scenes", Json::object()).items()) {
+      const std::string k = Normalised(key);
+      if (name.size() < k.size() ||
+          name.compare(name.size() - k.size(), k.size(), k) != 0)
+        continue;
+      for (const Json& row : list) rows.push_back(RowOf(row, label, false));
+    }
+  }
+  for (const Json& source : sources) {
+    std::string label = source.value("source", "published");
+    label = label.substr(0, label.find(" (")) + ", mean";
+    for (const Json& row : source.value("mean", Json::array()))
+      rows.push_back(RowOf(row, label, true));
+  }
+  const Json paper = benchmark.value("paper", Json());
+  if (paper.is_object() && paper.contains("rows")) {
+    for (const Json& row : paper["rows"])
+      rows.push_back(RowOf(row, "paper, mean", true));
+  }
+  return rows;
 }
 
 std::string WriteEvaluation(const EvaluationResult& r, const fs::path& out,
                             const fs::path& datasets_meta) {
-  Json paper;
-  const std::string file = BenchmarkFile(r.kind);
-  if (!file.empty() && fs::exists(datasets_meta / file)) {
-    paper = ReadJson(datasets_meta / file).value("paper", Json());
-  }
+  const Json benchmark = BenchmarkMeta(datasets_meta, r.kind);
   WriteFileAtomically(out / "per_frame.csv", EvaluationCsv(r));
   WriteJson(out / "metrics.json", EvaluationJson(r));
-  const std::string markdown = EvaluationMarkdown(r, paper);
+  const std::string markdown = EvaluationMarkdown(
+      r, PublishedRows(benchmark, r.scene), benchmark.is_object());
   WriteFileAtomically(out / "metrics.md", markdown);
   return markdown;
 }

@@ -32,7 +32,9 @@ struct FrameMetrics {
 };
 
 struct EvaluationResult {
-  std::string dataset;  // root folder
+  std::string dataset;   // root folder
+  std::string scene;     // Dataset::scene
+  std::string protocol;  // SplitDescription: the splits and size that ran
   std::string kind;
   std::string split;
   int factor = kEvaluationFactor;
@@ -56,17 +58,39 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
                                  const std::filesystem::path& renders,
                                  const EvaluateOptions& options);
 
+// A published result to set beside pano4d's: one method on one scene (from
+// a benchmark file's per_scene_published), or the mean over a benchmark's
+// scenes (the paper's table, or a source's mean row).
+struct PublishedRow {
+  std::string method;
+  std::string source;  // "paper" or the per-scene source's short name
+  bool mean = false;   // a mean over the benchmark's scenes
+  MetricRow values;
+};
+
+// The benchmark file of datasets_meta/ for a dataset kind ("dycheck",
+// "nvidia", "kubric4d"); null when there is none.
+nlohmann::json BenchmarkMeta(const std::filesystem::path& datasets_meta,
+                             const std::string& kind);
+
+// The published rows for `scene` (matched case-insensitively on letters
+// and digits: a folder "nvidia-balloon1" is scene "Balloon1"), then the
+// means: each per-scene source's mean row and the paper's table.
+std::vector<PublishedRow> PublishedRows(const nlohmann::json& benchmark,
+                                        const std::string& scene);
+
 // Writes per_frame.csv, metrics.json and metrics.md into `out` (atomically)
-// and returns the Markdown. Its table puts the paper's rows from
-// `datasets_meta` (the benchmark file for the dataset's kind) beside
-// pano4d's, when present.
+// and returns the Markdown. Its tables put the published rows of the
+// benchmark file in `datasets_meta` beside pano4d's: this scene's rows in
+// one table, the means over a benchmark's scenes in another.
 std::string WriteEvaluation(const EvaluationResult& result,
                             const std::filesystem::path& out,
                             const std::filesystem::path& datasets_meta);
 
 nlohmann::json EvaluationJson(const EvaluationResult& result);
 std::string EvaluationMarkdown(const EvaluationResult& result,
-                               const nlohmann::json& paper);
+                               const std::vector<PublishedRow>& published,
+                               bool benchmark_known);
 std::string EvaluationCsv(const EvaluationResult& result);
 
 }  // namespace pano4d

@@ -28,6 +28,7 @@ void AddInspectCommand(CLI::App& app, Action* action);
 void AddBenchCommand(CLI::App& app, Action* action);
 void AddBenchStability(CLI::App* bench, Action* action);
 void AddBenchBudget(CLI::App* bench, Action* action);
+void AddBenchDatasets(CLI::App* bench, Action* action);
 void AddDatasetCommand(CLI::App& app, Action* action);
 void AddSynthCommand(CLI::App& app, Action* action);
 void AddEvalCommand(CLI::App& app, Action* action);

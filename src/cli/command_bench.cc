@@ -103,6 +103,7 @@ void AddBenchCommand(CLI::App& app, Action* action) {
   AddBenchRender(bench, action);
   AddBenchStability(bench, action);
   AddBenchBudget(bench, action);
+  AddBenchDatasets(bench, action);
 }
 
 }  // namespace pano4d::cli

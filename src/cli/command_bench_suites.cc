@@ -1,5 +1,6 @@
-// pano4d bench stability and bench budget: the suites that fit the tiny or
-// small synthetic scene through the fit controller (src/pipeline/bench.h).
+// pano4d bench stability, budget and datasets: the suites that fit scenes
+// (the synthetic scene through the fit controller; a benchmark's scenes
+// through `pano4d run`) (src/pipeline/bench.h).
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -79,6 +80,50 @@ void AddBenchBudget(CLI::App* bench, Action* action) {
   sub->callback([action, o] {
     *action = [o] {
       std::printf("%s", RunBenchBudget(*o).table.c_str());
+      return kExitOk;
+    };
+  });
+}
+
+void AddBenchDatasets(CLI::App* bench, Action* action) {
+  auto o = std::make_shared<BenchDatasetsOptions>();
+  CLI::App* sub = bench->add_subcommand(
+      "datasets",
+      "Every scene under a benchmark root through `pano4d run --eval` (one "
+      "workspace per scene, resumable): a Markdown and CSV table of the "
+      "metrics, seconds and peak memory per scene and per suite, beside the "
+      "published rows of datasets_meta/");
+  sub->add_option("--root", o->root,
+                  "A folder of scene folders (Nvidia, DyCheck, Kubric-4D, "
+                  "pano4d synth layouts)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--suite", o->suite, "Only the scenes of this suite")
+      ->check(CLI::IsMember({"nvidia", "dycheck", "kubric", "synth"}));
+  sub->add_option("--scenes", o->scenes,
+                  "Only these scene folders (comma-separated names)")
+      ->delimiter(',');
+  sub->add_option("--iterations", o->iterations,
+                  "Fit iterations per scene (default: run's schedule)")
+      ->check(CLI::PositiveNumber);
+  AddLpipsWeightsOption(sub, &o->lpips_weights);
+  sub->add_option("--workspace", o->workspace,
+                  "Where the scenes' workspaces go (WS/<scene>) and the "
+                  "tables (WS/datasets.md, WS/datasets.csv)")
+      ->capture_default_str();
+  sub->footer(
+      "Each scene runs as its own `pano4d run` process (log in "
+      "WS/<scene>/pano4d/logs/bench_run.log) at its protocol's factor "
+      "(Kubric-4D 1, the others 2). A scene that finished with the same "
+      "command is read back from WS/<scene>/pano4d/bench_entry.json; a "
+      "failed scene is a row with its error, and the others go on. The exit "
+      "status is 1 when any scene failed.");
+  sub->callback([action, o] {
+    *action = [o] {
+      const BenchResult r = RunBenchDatasets(*o);
+      std::printf("%s", r.table.c_str());
+      for (const nlohmann::json& row : r.rows)
+        if (row.value("status", "") != "done") return kExitError;
       return kExitOk;
     };
   });

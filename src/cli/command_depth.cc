@@ -19,18 +19,15 @@ void AddDepthCommand(CLI::App& app, Action* action) {
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
       "depth",
-      "Per-frame z-depth and dynamic masks for fitting: from a dataset with "
-      "depth, plane-sweep stereo on the COLMAP poses, or external depth "
-      "maps aligned to the SfM points; writes WS/pano4d/frames.json");
+      "Per-frame z-depth and dynamic masks for fitting: external depth maps "
+      "aligned to the SfM points (--depth-dir), a dataset's own depth, or "
+      "plane-sweep stereo on the COLMAP poses (a dataset's cameras after "
+      "`pano4d sfm --dataset`); writes WS/pano4d/frames.json");
   sub->add_option("--workspace", o->workspace, "The workspace (created)")
       ->required();
   AddDatasetOption(sub, &o->depth.dataset);
   AddFactorOption(sub, &o->depth.factor);
-  sub->add_option("--depth-dir", o->depth.depth_dir,
-                  "Depth maps from another tool, <frame>.npy/.png (mm)/.tiff/"
-                  ".exr: scale and shift fitted per frame to the SfM points "
-                  "(Ceres, Cauchy loss)")
-      ->check(CLI::ExistingDirectory);
+  AddDepthDirOption(sub, &o->depth.depth_dir);
   AddHoldoutOption(sub, &o->depth.holdout);
   sub->footer(
       "Writes WS/pano4d/frames.json, WS/pano4d/depth/<frame>.npy (z-depth, "

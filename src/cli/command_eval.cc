@@ -30,10 +30,7 @@ void AddEvalCommand(CLI::App& app, Action* action) {
       ->capture_default_str();
   sub->add_option("--out", o->out,
                   "Output folder (default: <renders>/metrics)");
-  sub->add_option(
-      "--lpips-weights", o->lpips_weights,
-      "Folder of LPIPS AlexNet v0.1 weights (.npy files; see "
-      "scripts/lpips_weights_from_torch.py); without it LPIPS reads n/a");
+  AddLpipsWeightsOption(sub, &o->lpips_weights);
   AddFactorOption(sub, &o->factor);
   sub->callback([action, o] {
     *action = [o] {

@@ -30,8 +30,10 @@ void AddRunCommand(CLI::App& app, Action* action) {
   sub->add_flag("--eval", o->eval,
                 "Evaluate the validation renders (DyCheck metrics) when the "
                 "input has ground truth");
+  AddLpipsWeightsOption(sub, &o->lpips_weights);
   AddFactorOption(sub, &o->depth.factor);
   AddHoldoutOption(sub, &o->depth.holdout);
+  AddDepthDirOption(sub, &o->depth.depth_dir);
   AddMaxSizeOption(sub, &o->sfm.max_size);
   AddFitOptions(sub, &o->fit);
   sub->footer(

@@ -21,6 +21,7 @@ void AddSfmCommand(CLI::App& app, Action* action) {
       "images, with moving objects masked out");
   AddFramesInputOptions(sub, &sfm->video, &sfm->images);
   AddDatasetOption(sub, &o->dataset);
+  AddFactorOption(sub, &o->factor);
   sub->add_option("--workspace", sfm->workspace,
                   "COLMAP workspace (created): images/, masks/, database.db, "
                   "sparse/0, pano4d/")
@@ -54,8 +55,9 @@ void AddSfmCommand(CLI::App& app, Action* action) {
                   "alignment, also in pano4d/metrics/sfm_ground_truth.json")
       ->check(CLI::ExistingDirectory);
   sub->footer(
-      "With --dataset the training frames keep their cameras and colmap "
-      "point_triangulator adds the sparse points. Each step is skipped when "
+      "With --dataset the training frames keep their cameras (at --factor) "
+      "and colmap point_triangulator adds the sparse points. Each step is "
+      "skipped when "
       "an earlier run completed it with the same "
       "inputs (logs and stamps in WS/pano4d/logs/, step times in "
       "timings.json); --force redoes all.");

@@ -199,6 +199,23 @@ void AddFactorOption(CLI::App* app, int* factor) {
       ->capture_default_str();
 }
 
+void AddLpipsWeightsOption(CLI::App* app, std::filesystem::path* weights) {
+  app->add_option(
+         "--lpips-weights", *weights,
+         "Folder of LPIPS AlexNet v0.1 weights (.npy files; see "
+         "scripts/lpips_weights_from_torch.py); without it LPIPS reads n/a")
+      ->check(CLI::ExistingDirectory);
+}
+
+void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir) {
+  app->add_option("--depth-dir", *depth_dir,
+                  "Depth maps from another tool, <frame>.npy/.png (mm)/.tiff/"
+                  ".exr: scale and shift fitted per frame to the SfM points "
+                  "(Ceres, Cauchy loss); preferred to a dataset's own depth "
+                  "and to stereo")
+      ->check(CLI::ExistingDirectory);
+}
+
 void AddHoldoutOption(CLI::App* app, int* holdout) {
   app->add_option("--holdout", *holdout,
                   "Video or images: every N-th frame (i % N == 0) is held "

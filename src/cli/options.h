@@ -61,6 +61,11 @@ CLI::Option* AddDatasetOption(CLI::App* app, std::filesystem::path* dataset);
 void AddFactorOption(CLI::App* app, int* factor);
 // Video or images: every N-th frame held out for validation (--holdout).
 void AddHoldoutOption(CLI::App* app, int* holdout);
+// --lpips-weights: the LPIPS AlexNet weights folder (LPIPS reads n/a
+// without it).
+void AddLpipsWeightsOption(CLI::App* app, std::filesystem::path* weights);
+// --depth-dir: depth maps from another tool, aligned to the SfM points.
+void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir);
 // Video or images: the longest side frames are resized to (--max-size).
 void AddMaxSizeOption(CLI::App* app, int* max_size);
 // The synthetic scene's preset (--preset tiny|small|medium).

@@ -1,6 +1,7 @@
 #include "src/datasets/dataset.h"
 
 #include <map>
+#include <set>
 
 #include "src/core/error.h"
 #include "src/core/json.h"
@@ -19,6 +20,8 @@ std::string_view ToString(DatasetKind kind) {
       return "nvidia";
     case DatasetKind::kKubric4D:
       return "kubric4d";
+    case DatasetKind::kHeldOut:
+      return "held-out";
   }
   return "unknown";
 }
@@ -62,18 +65,62 @@ Json DatasetInfo(const Dataset& dataset) {
   return info;
 }
 
-Dataset LoadDataset(const fs::path& root, int factor) {
-  if (!fs::is_directory(root))
-    throw Error::In(root.string(), "is not a directory");
+std::string SplitDescription(const Dataset& dataset) {
+  const auto split = [](const char* name,
+                        const std::vector<DatasetFrame>& frames) {
+    std::set<int> cameras;
+    for (const DatasetFrame& f : frames) cameras.insert(f.camera_id);
+    std::string ids;
+    if (cameras.size() > 2 && *cameras.rbegin() - *cameras.begin() + 1 ==
+                                  static_cast<int>(cameras.size())) {
+      ids = std::to_string(*cameras.begin()) + ".." +
+            std::to_string(*cameras.rbegin());
+    } else {
+      for (const int c : cameras)
+        ids += (ids.empty() ? "" : ", ") + std::to_string(c);
+    }
+    return std::string(name) + ": camera" + (cameras.size() == 1 ? " " : "s ") +
+           ids + ", " + std::to_string(frames.size()) + " frames";
+  };
+  std::string size;
+  if (!dataset.val.empty() || !dataset.train.empty()) {
+    const Camera& c = (dataset.val.empty() ? dataset.train : dataset.val)
+                          .front()
+                          .camera.camera;
+    size = std::to_string(c.width) + "x" + std::to_string(c.height) + " ";
+  }
+  return split("train", dataset.train) + "; " + split("val", dataset.val) +
+         "; " + size + "(factor " + std::to_string(dataset.factor) + ")";
+}
+
+namespace {
+
+Dataset Detect(const fs::path& root, int factor) {
   if (LooksLikeDyCheck(root)) return ReadDyCheck(root, factor);
   if (LooksLikeNvidia(root)) return ReadNvidia(root, factor);
-  if (LooksLikeKubric4D(root)) return ReadKubric4D(root);
+  if (LooksLikeKubric4D(root)) return ReadKubric4D(root, factor);
   throw Error::In(root.string(),
                   "not a dataset pano4d knows: expected the DyCheck iPhone "
                   "layout (dataset.json, "
                   "splits/, camera/), Nvidia Dynamic Scenes (poses_bounds.npy) "
                   "or Kubric-4D "
                   "(<scene>_p0_v<V>.json)");
+}
+
+}  // namespace
+
+Dataset LoadDataset(const fs::path& root, int factor) {
+  if (!fs::is_directory(root))
+    throw Error::In(root.string(), "is not a directory");
+  Dataset dataset = Detect(root, factor);
+  // Nvidia scenes may keep their files in <scene>/dense/.
+  const fs::path folder = fs::absolute(root).lexically_normal();
+  const fs::path named =
+      folder.filename().empty() ? folder.parent_path() : folder;
+  dataset.scene = named.filename() == "dense"
+                      ? named.parent_path().filename().string()
+                      : named.filename().string();
+  return dataset;
 }
 
 }  // namespace pano4d

@@ -18,7 +18,9 @@ inline constexpr int kEvaluationFactor = 2;
 
 // One loader interface for every benchmark: a dataset is a list of frames in
 // a training and a validation split, each with its camera and files.
-enum class DatasetKind { kDyCheck, kNvidia, kKubric4D };
+// kHeldOut: frames of a video or image folder held out of the fit (no
+// benchmark of record).
+enum class DatasetKind { kDyCheck, kNvidia, kKubric4D, kHeldOut };
 std::string_view ToString(DatasetKind kind);
 
 // What a dataset's depth files hold.
@@ -41,6 +43,7 @@ struct DatasetFrame {
 struct Dataset {
   DatasetKind kind = DatasetKind::kDyCheck;
   std::filesystem::path root;
+  std::string scene;  // the scene's name: its folder's ("nvidia-balloon1")
   int factor = 1;  // resolution divisor of the loaded files (DyCheck: 1 or 2)
   double fps = 0.0;
   int num_times = 0;
@@ -61,6 +64,12 @@ struct Dataset {
 // What `pano4d dataset info` prints: kind, frame counts per split and camera,
 // image sizes, and whether depth and covisible masks are present on disk.
 nlohmann::json DatasetInfo(const Dataset& dataset);
+
+// The protocol that ran, in one line: which cameras train and validate,
+// how many frames each, at which size and factor ("train: camera 0..11, 12
+// frames; val: camera 0, 12 frames; 480x270 (factor 2)"). The evaluation
+// reports print it, so that a variant (Nvidia's 12 or 24 frames) is named.
+std::string SplitDescription(const Dataset& dataset);
 
 // Detects the layout of `root` and loads it; throws pano4d::Error naming the
 // folder and saying which layouts were looked for when none matches.

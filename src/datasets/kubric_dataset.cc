@@ -56,7 +56,13 @@ bool LooksLikeKubric4D(const fs::path& root) {
   return !ViewFiles(root).empty();
 }
 
-Dataset ReadKubric4D(const fs::path& root) {
+Dataset ReadKubric4D(const fs::path& root, int factor) {
+  if (factor != 1) {
+    throw Error::In(root.string(),
+                    "Kubric-4D has only full-resolution (1x) frames; got "
+                    "factor " +
+                        std::to_string(factor) + " (pass --factor 1)");
+  }
   const std::map<int, fs::path> views = ViewFiles(root);
   if (views.empty())
     throw Error::In(root.string(), "no <scene>_p0_v<V>.json metadata files");
@@ -82,6 +88,8 @@ Dataset ReadKubric4D(const fs::path& root) {
     }
     const int width = resolution[0], height = resolution[1];
     const int frames = GetJson<int>(scene, "num_frames", source);
+    // Kubric's get_scene_metadata writes scene.frame_rate (24 for GCD).
+    dataset.fps = GetJsonOr<double>(scene, "frame_rate", dataset.fps, source);
     const Json k = GetJson<Json>(camera, "K", source);
     if (!k.is_array() || k.size() != 3)
       throw Error(source, "camera.K", "", "expected 3x3");

@@ -7,6 +7,8 @@
 //              scenes or a fitted workspace's Gaussians at its cameras
 //   stability  the stiff and extreme suite: non-finite values per case
 //   budget     error against run time across fit budgets and resolutions
+//   datasets   every scene of a benchmark root through `pano4d run --eval`,
+//              beside the published rows
 
 #include <cstdint>
 #include <filesystem>
@@ -57,5 +59,27 @@ struct BudgetOptions {
 // Writes WS/budget.md, WS/budget_<factor>x.csv and .png; each fit in its
 // own workspace, read back when an earlier run finished it.
 BenchResult RunBenchBudget(const BudgetOptions& options);
+
+struct BenchDatasetsOptions {
+  std::filesystem::path root;  // one scene folder per entry
+  // nvidia, dycheck, kubric or synth (pano4d synth's scenes); empty: all.
+  std::string suite;
+  std::vector<std::string> scenes;  // folder names; empty: every scene found
+  int iterations = 0;               // 0: run's default
+  std::filesystem::path lpips_weights;  // empty: LPIPS reads n/a
+  std::filesystem::path workspace = "pano4d_bench_datasets";  // WS/<scene>
+  std::filesystem::path executable;  // pano4d; empty: this process's binary
+};
+// Runs `pano4d run --dataset <scene> --eval` per scene, each as a child
+// process (its own workspace WS/<scene>, its log, its peak memory), at the
+// factor of the scene's protocol (Kubric-4D 1, the others 2). A scene whose
+// entry (WS/<scene>/pano4d/bench_entry.json) says it finished with the same
+// command is read back, not run; a failed scene is a row with its error and
+// the sweep goes on. Writes WS/datasets.md and WS/datasets.csv.
+BenchResult RunBenchDatasets(const BenchDatasetsOptions& options);
+
+// The benchmark suite a scene folder belongs to ("nvidia", "dycheck",
+// "kubric", "synth"), or empty when it is no dataset pano4d reads.
+std::string SuiteOf(const std::filesystem::path& scene);
 
 }  // namespace pano4d

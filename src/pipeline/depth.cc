@@ -66,23 +66,22 @@ WorkspaceFrame FrameOf(const DatasetFrame& d) {
   return f;
 }
 
-WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o) {
-  const Dataset ds = LoadDataset(o.dataset, o.factor);
+// The dataset's frames at o.factor; with `copy_depth` their depth maps are
+// copied into the workspace (as z-depth), otherwise a later step gives them
+// depth.
+WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o,
+                                  const Dataset& ds, bool copy_depth) {
   WorkspaceFrames frames;
   frames.source = "dataset " + fs::absolute(o.dataset).string();
-  frames.depth_source = kDepthFromDataset;
   frames.dataset = fs::absolute(o.dataset);
   frames.dataset_factor = ds.factor;
   frames.num_times = ds.num_times;
   ProgressBar bar("depth", static_cast<std::int64_t>(ds.train.size()));
-  std::int64_t missing_depth = 0;
   for (const DatasetFrame& d : ds.train) {
     WorkspaceFrame f = FrameOf(d);
-    if (!d.depth.empty()) {
+    if (copy_depth) {
       f.depth = ws.depth_map(f.name);
       WriteDepthMap(f.depth, ReadDepth(d));
-    } else {
-      ++missing_depth;
     }
     // The synthetic generator's ground-truth dynamic masks, when present.
     const fs::path gt_mask = o.dataset / "dynamic" /
@@ -93,13 +92,6 @@ WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o) {
     bar.Add();
   }
   bar.Finish();
-  if (missing_depth > 0 && o.depth_dir.empty()) {
-    throw Error(o.dataset.string(), "depth",
-                std::to_string(missing_depth) + " frames",
-                "the dataset has no depth for them; pass --depth-dir with "
-                "depth maps from another tool (aligned to `pano4d sfm "
-                "--dataset` points)");
-  }
   for (const DatasetFrame& d : ds.val) {
     WorkspaceFrame f = FrameOf(d);
     f.covisible = d.covisible;
@@ -108,21 +100,29 @@ WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o) {
   return frames;
 }
 
+// The COLMAP model that `pano4d sfm` (or run's adoption of a COLMAP
+// workspace) recorded in WS/pano4d/sfm.json, and the folder of its images.
+ColmapModel ReadSfmModel(const Workspace& ws, fs::path* model_dir,
+                         fs::path* images) {
+  const fs::path sfm_json = ws.sfm_json();
+  if (!fs::exists(sfm_json)) {
+    throw Error(sfm_json.string(), "", "",
+                "missing; run `pano4d sfm` first (with --dataset for a "
+                "dataset's cameras)");
+  }
+  const Json sfm = ReadJson(sfm_json);
+  *model_dir =
+      ws.root() / GetJson<std::string>(sfm, "model", sfm_json.string());
+  *images = ws.root() / GetJson<std::string>(sfm, "images", sfm_json.string());
+  return ReadModel(*model_dir);
+}
+
 // The frames of `pano4d sfm`'s model (undistorted, pinhole), in name order;
 // every holdout-th one (LLFF's convention: i % holdout == 0) validates.
 WorkspaceFrames FramesFromWorkspace(const Workspace& ws, const DepthOptions& o,
                                     ColmapModel* model) {
-  const fs::path sfm_json = ws.sfm_json();
-  if (!fs::exists(sfm_json)) {
-    throw Error(sfm_json.string(), "", "",
-                "missing; run `pano4d sfm` first, or pass --dataset");
-  }
-  const Json sfm = ReadJson(sfm_json);
-  const fs::path model_dir =
-      ws.root() / GetJson<std::string>(sfm, "model", sfm_json.string());
-  const fs::path images =
-      ws.root() / GetJson<std::string>(sfm, "images", sfm_json.string());
-  *model = ReadModel(model_dir);
+  fs::path model_dir, images;
+  *model = ReadSfmModel(ws, &model_dir, &images);
   std::vector<const ColmapImage*> sorted;
   for (const ColmapImage& image : model->images) sorted.push_back(&image);
   std::sort(sorted.begin(), sorted.end(),
@@ -175,20 +175,12 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
   nlohmann::json report = nlohmann::json::array();
   ProgressBar bar("depth", static_cast<std::int64_t>(frames->train.size()));
   int failed = 0;
-  for (WorkspaceFrame& f : frames->train) {
-    fs::path file;
-    for (const char* ext : {".npy", ".png", ".tiff", ".tif", ".exr"}) {
-      if (fs::exists(o.depth_dir / (f.name + ext))) {
-        file = o.depth_dir / (f.name + ext);
-        break;
-      }
-    }
-    if (file.empty()) {
-      throw Error(o.depth_dir.string(), "frame", f.name,
-                  "no depth map named " + f.name +
-                      ".npy/.png/.tiff/.exr (one per frame is needed)");
-    }
-    cv::Mat depth = ReadDepthMap(file);
+  std::vector<std::string> names;
+  for (const WorkspaceFrame& f : frames->train) names.push_back(f.name);
+  const std::vector<fs::path> files = ExternalDepthFiles(o.depth_dir, names);
+  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+    WorkspaceFrame& f = frames->train[i];
+    cv::Mat depth = ReadDepthMap(files[i]);
     const int w = f.camera.camera.width, h = f.camera.camera.height;
     if (depth.cols != w || depth.rows != h) {
       cv::Mat resized;
@@ -226,8 +218,9 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
   }
 }
 
-// Plane-sweep stereo depth for every training frame of a COLMAP workspace
-// (DESIGN.md "depth"): neighbours among the other training frames chosen by
+// Plane-sweep stereo depth for every training frame, on the poses of the
+// COLMAP model (a dataset's own cameras when `pano4d sfm --dataset` made
+// it; DESIGN.md "depth"): neighbours among the other training frames chosen by
 // baseline, the depth range from the frame's sparse points, moving pixels
 // removed (the object moved between the frames); the SfM points check the
 // result (scale and median relative error in stereo.json).
@@ -369,29 +362,72 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   EnsureDirectory(ws.depth());
   DepthSummary summary;
   WorkspaceFrames& frames = summary.frames;
+  ColmapModel model;
   if (!o.dataset.empty()) {
-    frames = FramesFromDataset(ws, o);
+    const Dataset ds = LoadDataset(o.dataset, o.factor);
+    const std::string source = DepthSourceFor(HasDepth(ds), o.depth_dir);
+    frames = FramesFromDataset(ws, o, ds, source == kDepthFromDataset);
+    frames.depth_source = source;
     ComputeMissingMasks(ws.dynamic_masks(), &frames.train);
+    // The sparse points of `pano4d sfm --dataset`, at the same factor.
+    if (frames.depth_source != kDepthFromDataset) {
+      fs::path model_dir, images;
+      model = ReadSfmModel(ws, &model_dir, &images);
+    }
   } else {
-    ColmapModel model;
     frames = FramesFromWorkspace(ws, o, &model);
+    frames.depth_source = DepthSourceFor(false, o.depth_dir);
     // Masks first: stereo leaves moving pixels without depth. The masks of
     // `pano4d sfm` belong to the frames before undistortion; where the
     // undistorted frames differ in size they are computed again on these.
     ComputeMissingMasks(ws.undistorted_dynamic_masks(), &frames.train);
-    if (o.depth_dir.empty()) {
-      StereoDepth(ws, o, model, &frames);
-      frames.depth_source = kDepthFromStereo;
-    } else {
-      AlignExternalDepth(ws, o, model, &frames);
-      frames.depth_source = kDepthFromExternal;
-    }
   }
+  if (frames.depth_source == kDepthFromStereo)
+    StereoDepth(ws, o, model, &frames);
+  else if (frames.depth_source == kDepthFromExternal)
+    AlignExternalDepth(ws, o, model, &frames);
   frames.depth_options = o.ToJson();
   WriteWorkspaceFrames(ws.root(), frames);
   for (const WorkspaceFrame& f : frames.train)
     summary.with_depth += !f.depth.empty();
   return summary;
+}
+
+const char* DepthSourceFor(bool dataset_depth, const fs::path& depth_dir) {
+  if (!depth_dir.empty()) return kDepthFromExternal;
+  return dataset_depth ? kDepthFromDataset : kDepthFromStereo;
+}
+
+bool HasDepth(const Dataset& dataset) {
+  if (dataset.train.empty()) return false;
+  for (const DatasetFrame& f : dataset.train)
+    if (f.depth.empty()) return false;
+  return true;
+}
+
+std::vector<fs::path> ExternalDepthFiles(
+    const fs::path& dir, const std::vector<std::string>& frames) {
+  if (!fs::is_directory(dir))
+    throw Error::In(dir.string(),
+                    "is not a folder of depth maps (--depth-dir)");
+  std::vector<fs::path> files;
+  for (const std::string& name : frames) {
+    fs::path file;
+    for (const char* ext : {".npy", ".png", ".tiff", ".tif", ".exr"}) {
+      if (fs::exists(dir / (name + ext))) {
+        file = dir / (name + ext);
+        break;
+      }
+    }
+    if (file.empty()) {
+      throw Error(dir.string(), "frame", name,
+                  "no depth map named " + name +
+                      ".npy/.png/.tiff/.exr (one per training frame is "
+                      "needed)");
+    }
+    files.push_back(file);
+  }
+  return files;
 }
 
 }  // namespace pano4d

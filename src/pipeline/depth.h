@@ -3,12 +3,15 @@
 // The depth stage: the frames every later stage works on
 // (WS/pano4d/frames.json), each with a z-depth map (WS/pano4d/depth/) and a
 // dynamic mask, from a dataset with known cameras or from the COLMAP
-// workspace of `pano4d sfm`. Depth comes, in that order of preference, from
-// the dataset, from another tool's maps aligned to the SfM points
-// (depth_dir), or from plane-sweep stereo on the COLMAP poses.
+// workspace of `pano4d sfm`. Depth comes from another tool's maps aligned to
+// the SfM points when depth_dir is given (the user's word), else from the
+// dataset when it has depth for every training frame, else from plane-sweep
+// stereo on the COLMAP model's poses (for a dataset: its own cameras, with
+// the points of `pano4d sfm --dataset` at the same factor).
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -41,5 +44,19 @@ struct DepthSummary {
 };
 
 DepthSummary RunDepth(const Workspace& workspace, const DepthOptions& options);
+
+// The depth source RunDepth takes (one of kDepthFrom*, frames.h): the order
+// of preference above. The planner names it before any work.
+const char* DepthSourceFor(bool dataset_depth,
+                           const std::filesystem::path& depth_dir);
+
+// Whether every training frame of the dataset has a depth map.
+bool HasDepth(const Dataset& dataset);
+
+// The depth map of each frame in `dir` (<name>.npy, .png, .tiff, .tif or
+// .exr, in that order); throws pano4d::Error naming the folder and the
+// first frame without one.
+std::vector<std::filesystem::path> ExternalDepthFiles(
+    const std::filesystem::path& dir, const std::vector<std::string>& frames);
 
 }  // namespace pano4d

@@ -21,9 +21,15 @@ fs::path DatasetsMetaDir() {
 }
 
 Dataset ValidationDataset(const Workspace& ws, const WorkspaceFrames& frames) {
+  // The ground truth of record: the dataset the frames came from.
+  if (!frames.dataset.empty())
+    return LoadDataset(frames.dataset, frames.dataset_factor);
   Dataset dataset;
-  dataset.root = frames.dataset.empty() ? ws.root() : frames.dataset;
-  dataset.factor = frames.dataset_factor > 0 ? frames.dataset_factor : 1;
+  dataset.kind = DatasetKind::kHeldOut;
+  dataset.root = ws.root();
+  dataset.scene =
+      fs::absolute(ws.root()).lexically_normal().filename().string();
+  dataset.factor = 1;
   dataset.num_times = frames.num_times;
   for (const WorkspaceFrame& f : frames.val) {
     DatasetFrame d;

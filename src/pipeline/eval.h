@@ -34,8 +34,8 @@ EvalSummary RunEval(const EvalOptions& options);
 std::filesystem::path DatasetsMetaDir();
 
 // The validation split of a workspace's frames as a dataset to score: the
-// dataset they came from (at their factor), or the workspace itself for
-// frames held out of a video.
+// dataset they came from (loaded again at their factor), or the workspace
+// itself for frames held out of a video (kind kHeldOut).
 Dataset ValidationDataset(const Workspace& workspace,
                           const WorkspaceFrames& frames);
 

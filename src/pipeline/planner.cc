@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
+#include "src/core/frames.h"
+#include "src/pipeline/depth.h"
 
 namespace pano4d {
 namespace {
@@ -22,10 +24,13 @@ StageDecision Sfm(const PlanFacts& f) {
             "no poses: COLMAP estimates them from the frames (feature "
             "extraction, matching, mapping, undistortion)"};
   }
-  if (f.input == InputKind::kDataset && !f.depth_given) {
+  if (f.input == InputKind::kDataset && f.depth_source != kDepthFromDataset) {
     return {"sfm", true, false,
-            "poses given, but no depth: COLMAP triangulates sparse points "
-            "with the dataset's poses, to align the estimated depth to"};
+            std::string("poses given, depth not: COLMAP point_triangulator "
+                        "makes sparse points with the dataset's cameras, to ") +
+                (f.depth_source == kDepthFromExternal
+                     ? "align the --depth-dir maps to"
+                     : "bound and check the stereo depth")};
   }
   return {"sfm", false, false,
           f.input == InputKind::kColmap
@@ -34,14 +39,26 @@ StageDecision Sfm(const PlanFacts& f) {
 }
 
 StageDecision Depth(const PlanFacts& f) {
-  if (f.depth_given) {
+  if (f.depth_source == kDepthFromExternal) {
+    return {"depth", true, false,
+            "depth from --depth-dir " + f.depth_dir +
+                ": each frame's map aligned (scale and shift) to the sparse "
+                "points"};
+  }
+  if (f.depth_source == kDepthFromDataset) {
     return {"depth", false, false,
             "depth given: the dataset's depth maps are used as they are (the "
             "stage only lists the frames)"};
   }
-  return {"depth", true, false,
-          "no depth: plane-sweep stereo on the COLMAP poses, aligned to the "
-          "sparse points"};
+  return {
+      "depth", true, false,
+      std::string(f.input == InputKind::kDataset ? "no depth in the dataset: "
+                                                 : "no depth: ") +
+          "plane-sweep stereo over the training frames that see the same "
+          "part of the scene, on " +
+          (f.input == InputKind::kDataset ? "the dataset's cameras"
+                                          : "the COLMAP poses") +
+          ", checked against the sparse points"};
 }
 
 StageDecision Motion(const PlanFacts& f) {
@@ -71,6 +88,12 @@ StageDecision Expansion(const PlanFacts& f) {
             "panoramic trajectories, which leave the training coverage"};
   }
   const std::string views = std::to_string(f.target_views) + " target views";
+  if (!f.unseen_fraction && f.targets_are_training_cameras) {
+    return {"expansion", false, false,
+            "the " + views +
+                " are training cameras (seen at other times): none of their "
+                "pixels lies outside the training coverage"};
+  }
   if (!f.unseen_fraction) {
     return {"expansion", true, false,
             "the coverage of the " + views +
@@ -98,8 +121,9 @@ StageDecision Eval(const PlanFacts& f) {
             "not asked for (--eval); the fit still reports validation PSNR"};
   }
   return {"eval", true, false,
-          "ground truth: DyCheck metrics (full, m* covisible, u* unseen) on "
-          "the validation frames"};
+          "ground truth: PSNR, SSIM and LPIPS on the validation frames (and "
+          "DyCheck's m* covisible, u* unseen where the dataset has "
+          "covisibility masks)"};
 }
 
 }  // namespace
@@ -135,19 +159,23 @@ nlohmann::json Plan::ToJson() const {
   const auto optional = [](const std::optional<double>& v) {
     return v ? nlohmann::json(*v) : nlohmann::json();
   };
-  return {{"input",
-           {{"kind", InputKindName(facts.input)}, {"path", facts.input_path}}},
-          {"facts",
-           {{"poses_given", facts.poses_given},
-            {"depth_given", facts.depth_given},
-            {"dynamic_fraction", optional(facts.dynamic_fraction)},
-            {"target_views", facts.target_views},
-            {"unseen_fraction", optional(facts.unseen_fraction)},
-            {"ground_truth", facts.ground_truth},
-            {"eval_requested", facts.eval_requested},
-            {"no_expansion", facts.no_expansion},
-            {"no_motion", facts.no_motion}}},
-          {"stages", s}};
+  return {
+      {"input",
+       {{"kind", InputKindName(facts.input)}, {"path", facts.input_path}}},
+      {"facts",
+       {{"poses_given", facts.poses_given},
+        {"depth_given", facts.depth_given},
+        {"depth_dir", facts.depth_dir},
+        {"depth_source", facts.depth_source},
+        {"dynamic_fraction", optional(facts.dynamic_fraction)},
+        {"target_views", facts.target_views},
+        {"unseen_fraction", optional(facts.unseen_fraction)},
+        {"targets_are_training_cameras", facts.targets_are_training_cameras},
+        {"ground_truth", facts.ground_truth},
+        {"eval_requested", facts.eval_requested},
+        {"no_expansion", facts.no_expansion},
+        {"no_motion", facts.no_motion}}},
+      {"stages", s}};
 }
 
 std::string Plan::Table() const {
@@ -165,7 +193,9 @@ std::string Plan::Table() const {
   return out.str();
 }
 
-Plan MakePlan(const PlanFacts& facts) {
+Plan MakePlan(const PlanFacts& given) {
+  PlanFacts facts = given;
+  facts.depth_source = DepthSourceFor(facts.depth_given, facts.depth_dir);
   Plan plan;
   plan.facts = facts;
   plan.stages = {Sfm(facts),

@@ -24,6 +24,11 @@ struct PlanFacts {
   std::string input_path;
   bool poses_given = false;  // a COLMAP workspace or a dataset's cameras
   bool depth_given = false;  // a dataset with depth maps for every frame
+  std::string depth_dir;     // --depth-dir: another tool's depth maps
+  // Where the training depth will come from: kDepthFrom* (frames.h), as
+  // DepthSourceFor (depth.h) chooses it from the two above; MakePlan fills
+  // it in.
+  std::string depth_source;
   // Fraction of training pixels the dynamic masks mark as moving.
   std::optional<double> dynamic_fraction;
   // Target views: the validation cameras, when the input has them. The
@@ -31,6 +36,10 @@ struct PlanFacts {
   // views given, the expansion's own trajectories are the targets).
   int target_views = 0;
   std::optional<double> unseen_fraction;
+  // Every target view has the pose and intrinsics of a training frame (the
+  // Nvidia protocol tests view 0, which trains at time 0): then nothing of
+  // theirs lies outside the training coverage, masks or not.
+  bool targets_are_training_cameras = false;
   bool ground_truth = false;  // validation frames with images
   // The user's word, which overrides the facts.
   bool eval_requested = false;

@@ -283,19 +283,18 @@ ReportSummary WriteReport(const Workspace& ws) {
      << fit.value("dynamic_gaussians", 0) << " dynamic Gaussians.\n\n";
   md << "## Stages\n\n" << PlanTable(plan) << "\n";
   if (evaluated) {
-    md << "## Metrics (beside the paper's DyCheck rows)\n\n";
+    md << "## Metrics (beside the published rows)\n\n";
     if (!frames.dataset.empty()) {
       md << "Reproduce with `pano4d eval --dataset " << frames.dataset.string()
          << " --factor " << frames.dataset_factor << " --renders "
          << ws.val_renders().string() << "`. ";
     }
-    md << "The paper's rows are its numbers on DyCheck's real iPhone "
-          "captures";
     if (fs::exists(frames.dataset / "synth.json")) {
-      md << "; this scene is synthetic, so compare the pattern across the "
-            "columns (full, covisible m*, unseen u*), not the values";
+      md << "This scene is synthetic and the published means are over "
+            "DyCheck's real iPhone captures: compare the pattern across the "
+            "columns (full, covisible m*, unseen u*), not the values.";
     }
-    md << ".\n\n";
+    md << "\n\n";
     std::string table = ReadTextFile(summary.dir / "metrics.md");
     if (table.rfind("# ", 0) == 0) table = table.substr(table.find('\n') + 1);
     md << table << "\n";

@@ -6,7 +6,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/model.h"
+#include "evaluation/lpips.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/frames.h"
@@ -42,6 +44,32 @@ std::optional<double> UnseenFraction(const Dataset& dataset) {
     total += static_cast<double>(m.total());
   }
   return unseen / total;
+}
+
+// Two cameras closer than this (rotation in radians, centres relative to
+// their distance from the origin plus one) are the same camera: a dataset's
+// poses are stored to float precision or better.
+constexpr double kSameCameraTolerance = 1e-6;
+
+// Whether every validation frame is seen from a training frame's camera.
+bool ValidationCamerasAreTraining(const Dataset& dataset) {
+  if (dataset.val.empty()) return false;
+  for (const DatasetFrame& v : dataset.val) {
+    const Eigen::Vector3d cv = CameraCenter(v.camera.cam_from_world);
+    bool found = false;
+    for (const DatasetFrame& t : dataset.train) {
+      const Eigen::Vector3d ct = CameraCenter(t.camera.cam_from_world);
+      found = t.camera.camera.params == v.camera.camera.params &&
+              t.camera.camera.width == v.camera.camera.width &&
+              t.camera.camera.height == v.camera.camera.height &&
+              v.camera.cam_from_world.rotation.angularDistance(
+                  t.camera.cam_from_world.rotation) < kSameCameraTolerance &&
+              (cv - ct).norm() < kSameCameraTolerance * (1 + cv.norm());
+      if (found) break;
+    }
+    if (!found) return false;
+  }
+  return true;
 }
 
 // The fraction of training pixels the dynamic masks of frames.json mark as
@@ -92,16 +120,39 @@ bool FitComplete(const Workspace& ws, int iterations) {
          !j.value("stopped_by_time_budget", false);
 }
 
-// Whether frames.json was listed from this input: a dataset at the same
-// path and factor, or (video, images, COLMAP) any, since the depth stage
-// writes it last.
-bool FramesFromThisInput(const Workspace& ws, const RunOptions& o) {
+// Whether frames.json was listed from this input with the planned depth
+// source: a dataset at the same path and factor, or (video, images, COLMAP)
+// any, since the depth stage writes it last.
+bool FramesFromThisInput(const Workspace& ws, const RunOptions& o,
+                         const PlanFacts& facts) {
   if (!fs::exists(ws.frames_json())) return false;
   const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
+  if (frames.depth_source != facts.depth_source) return false;
+  if (facts.depth_source == kDepthFromExternal &&
+      frames.depth_options.value("depth_dir", "") != o.depth.depth_dir.string())
+    return false;
   if (o.dataset.empty()) return true;
   return frames.dataset_factor == o.depth.factor &&
          fs::weakly_canonical(frames.dataset) ==
              fs::weakly_canonical(o.dataset);
+}
+
+// What would stop a stage of the plan half way, checked before the first:
+// the colmap executable for sfm, the LPIPS weights for eval, a depth map per
+// training frame in
+// --depth-dir (for a COLMAP model the frames are known after sfm; then only
+// the folder is checked).
+void CheckPlanCanRun(const RunOptions& o, const Plan& plan) {
+  if (plan.Runs("sfm")) ColmapRunner check(o.sfm.colmap);
+  if (plan.Runs("eval") && !o.lpips_weights.empty())
+    Lpips::Load(o.lpips_weights);
+  if (o.depth.depth_dir.empty()) return;
+  std::vector<std::string> names;
+  if (!o.dataset.empty()) {
+    for (const DatasetFrame& f : LoadDataset(o.dataset, o.depth.factor).train)
+      names.push_back(f.id);
+  }
+  ExternalDepthFiles(o.depth.depth_dir, names);
 }
 
 void WritePlan(const Workspace& ws, const RunOptions& o, const Plan& plan,
@@ -124,6 +175,7 @@ nlohmann::json RunOptions::ToJson() const {
           {"dataset", dataset.string()},
           {"workspace", workspace.string()},
           {"eval", eval},
+          {"lpips_weights", lpips_weights.string()},
           {"sfm", sfm.ToJson()},
           {"depth", depth.ToJson()},
           {"fit", fit.ToJson()}};
@@ -139,12 +191,11 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.input_path = o.dataset.string();
     const Dataset d = LoadDataset(o.dataset, o.depth.factor);
     f.poses_given = true;
-    f.depth_given = !d.train.empty();
-    for (const DatasetFrame& frame : d.train)
-      f.depth_given = f.depth_given && !frame.depth.empty();
+    f.depth_given = HasDepth(d);
     f.target_views = static_cast<int>(d.val.size());
     f.ground_truth = !d.val.empty();
     f.unseen_fraction = UnseenFraction(d);
+    f.targets_are_training_cameras = ValidationCamerasAreTraining(d);
   } else if (!o.colmap.empty()) {
     f.input = InputKind::kColmap;
     f.input_path = o.colmap.string();
@@ -154,6 +205,7 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.input = s.video.empty() ? InputKind::kImages : InputKind::kVideo;
     f.input_path = (s.video.empty() ? s.images : s.video).string();
   }
+  f.depth_dir = o.depth.depth_dir.string();
   // A workspace that an earlier run took through depth already knows.
   const Workspace ws(o.workspace);
   if (fs::exists(ws.frames_json()))
@@ -189,13 +241,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   PlanFacts facts = GatherFacts(o);
   Plan plan = MakePlan(facts);
   if (progress) *progress << plan.Table() << std::flush;
-  if (!o.dataset.empty() && plan.Runs("depth")) {
-    throw Error(o.dataset.string(), "depth", "",
-                "the dataset has no depth for every training frame, and `run` "
-                "estimates depth only on its own COLMAP workspaces: run "
-                "`pano4d sfm --dataset D --workspace WS`, then `pano4d run "
-                "--colmap WS`");
-  }
+  CheckPlanCanRun(o, plan);
   RunSummary summary;
   summary.stages = nlohmann::json::object();
   WritePlan(ws, o, plan, summary.stages);
@@ -216,13 +262,14 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       s.sfm = o.sfm;
       s.sfm.workspace = ws.root();
       s.dataset = o.dataset;
+      s.factor = o.depth.factor;
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
       return std::string("done");
     });
   }
   stage("depth", [&] {
-    if (FramesFromThisInput(ws, o))
+    if (FramesFromThisInput(ws, o, plan.facts))
       return std::string("complete from an earlier run");
     DepthOptions d = o.depth;
     d.dataset = o.dataset;
@@ -266,6 +313,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       e.renders = ws.val_renders();
       e.out = ws.metrics();
       e.factor = o.depth.factor;
+      e.lpips_weights = o.lpips_weights;
       const EvalSummary r = RunEval(e);
       if (progress) {
         *progress << r.markdown << "\nwritten to " << r.out.string()

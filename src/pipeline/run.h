@@ -24,6 +24,7 @@ struct RunOptions {
   std::filesystem::path colmap, dataset;
   std::filesystem::path workspace;  // with colmap: empty or the same folder
   bool eval = false;  // DyCheck metrics when the input has ground truth
+  std::filesystem::path lpips_weights;  // for eval; empty: LPIPS reads n/a
   // The stages' own options, as their commands take them: sfm (video,
   // images, max_size; its workspace is run's), depth (factor, holdout; its
   // dataset is run's) and the fit, whose init.num_bases = 0 and expand =

@@ -82,8 +82,9 @@ std::string SfmStageSummary::FullReport() const {
 SfmStageSummary RunSfmStage(const SfmStageOptions& options) {
   SfmOptions sfm = options.sfm;
   if (!options.dataset.empty()) {
-    // Known poses: the training frames at full resolution, named by id.
-    const Dataset dataset = LoadDataset(options.dataset, /*factor=*/1);
+    // Known poses: the training frames at the stage's factor (the
+    // resolution every later stage works at), named by id.
+    const Dataset dataset = LoadDataset(options.dataset, options.factor);
     for (const DatasetFrame& frame : dataset.train)
       sfm.known.push_back({frame.rgb, frame.id + ".png", frame.camera});
   }

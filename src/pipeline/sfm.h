@@ -12,14 +12,16 @@
 #include "colmap_ext/alignment.h"
 #include "colmap_ext/sfm.h"
 #include "src/core/workspace.h"
+#include "src/datasets/dataset.h"
 
 namespace pano4d {
 
 struct SfmStageOptions {
   SfmOptions sfm;  // its workspace is the stage's
-  // A dataset whose training frames keep their cameras (full resolution,
-  // named <id>.png); colmap point_triangulator adds the sparse points.
+  // A dataset whose training frames keep their cameras (at `factor`, named
+  // <id>.png); colmap point_triangulator adds the sparse points.
   std::filesystem::path dataset;
+  int factor = kEvaluationFactor;  // the dataset's resolution divisor
   // A dataset whose cameras to compare the estimate with (ATE, RPE).
   std::filesystem::path compare_gt;
 };

@@ -29,7 +29,10 @@ Json KubricView(const Eigen::Vector3d& eye, int frames) {
                {{"K", {{1.0, 0.0, -0.5}, {0.0, -1.5, -0.5}, {0.0, 0.0, -1.0}}},
                 {"positions", positions},
                 {"quaternions", quaternions}}},
-              {"scene", {{"resolution", {576, 384}}, {"num_frames", frames}}}};
+              {"scene",
+               {{"resolution", {576, 384}},
+                {"num_frames", frames},
+                {"frame_rate", 24}}}};
 }
 
 TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
@@ -47,6 +50,9 @@ TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
   ASSERT_EQ(d.train.size(), 3u);
   ASSERT_EQ(d.val.size(), 15u);
   EXPECT_EQ(d.num_times, 3);
+  EXPECT_DOUBLE_EQ(d.fps, 24.0);
+  EXPECT_EQ(d.factor, 1);
+  EXPECT_THROW(LoadDataset(dir.path(), 2), Error);  // no 2x files exist
   for (const auto* split : {&d.train, &d.val}) {
     for (const DatasetFrame& f : *split) {
       EXPECT_DOUBLE_EQ(f.camera.camera.focal_x(), 576.0);
@@ -62,6 +68,7 @@ TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
   }
   EXPECT_EQ(d.train[2].id, "v4_t00002");
   EXPECT_EQ(d.train[2].rgb, dir / "frames_p0_v4" / "rgba_00002.png");
+  EXPECT_EQ(d.train[2].depth_convention, DepthConvention::kRayDistance);
 }
 
 TEST(KubricDatasetTest, MissingTrainingViewAndShortPoseListsAreErrors) {

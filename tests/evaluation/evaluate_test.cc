@@ -104,7 +104,7 @@ TEST(EvaluateTest, JsonMarkdownAndCsvAgree) {
     }
   }
   // The paper's rows sit beside pano4d's.
-  EXPECT_NE(markdown.find("PanoGaussian (Ours) (paper) | 18.71"),
+  EXPECT_NE(markdown.find("PanoGaussian (Ours) (paper, mean) | 18.71"),
             std::string::npos)
       << markdown;
   // One CSV line per frame plus the header.

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
+#include "src/core/frames.h"
 
 namespace pano4d {
 namespace {
@@ -62,14 +63,45 @@ TEST(PlannerTest, GivenPosesAndDepthLeaveSfmAndDepthOut) {
   EXPECT_NE(plan.Get("depth").why.find("depth given"), std::string::npos);
   EXPECT_TRUE(plan.Runs("eval"));
 
-  // A dataset without depth: COLMAP triangulates with its poses, for the
-  // estimated depth to be aligned to.
+  // A dataset without depth: COLMAP triangulates points with its cameras,
+  // and stereo on those cameras gives the depth; the plan names the source.
   PlanFacts no_depth = SynthDataset();
   no_depth.depth_given = false;
   plan = MakePlan(no_depth);
+  EXPECT_EQ(plan.facts.depth_source, kDepthFromStereo);
   EXPECT_TRUE(plan.Runs("sfm"));
-  EXPECT_NE(plan.Get("sfm").why.find("triangulates"), std::string::npos);
+  EXPECT_NE(plan.Get("sfm").why.find("point_triangulator"), std::string::npos);
+  EXPECT_NE(plan.Get("sfm").why.find("dataset's cameras"), std::string::npos);
   EXPECT_TRUE(plan.Runs("depth"));
+  EXPECT_NE(plan.Get("depth").why.find("stereo"), std::string::npos);
+  EXPECT_NE(plan.Get("depth").why.find("dataset's cameras"), std::string::npos);
+
+  // --depth-dir is the user's word: preferred to the dataset's own depth,
+  // and aligned to triangulated points.
+  PlanFacts external = SynthDataset();
+  external.depth_dir = "other-tool/depth";
+  plan = MakePlan(external);
+  EXPECT_EQ(plan.facts.depth_source, kDepthFromExternal);
+  EXPECT_TRUE(plan.Runs("sfm"));
+  EXPECT_NE(plan.Get("sfm").why.find("--depth-dir"), std::string::npos);
+  EXPECT_TRUE(plan.Runs("depth"));
+  EXPECT_NE(plan.Get("depth").why.find("other-tool/depth"), std::string::npos);
+  EXPECT_EQ(plan.ToJson()["facts"]["depth_source"], kDepthFromExternal);
+}
+
+TEST(PlannerTest, TargetsAtTrainingCamerasNeedNoExpansion) {
+  // The Nvidia protocol: view 0 tests, and view 0 trains at time 0.
+  PlanFacts f = SynthDataset();
+  f.unseen_fraction.reset();
+  EXPECT_TRUE(MakePlan(f).Runs("expansion"));  // coverage unknown
+  f.targets_are_training_cameras = true;
+  const Plan plan = MakePlan(f);
+  EXPECT_FALSE(plan.Runs("expansion"));
+  EXPECT_NE(plan.Get("expansion").why.find("training cameras"),
+            std::string::npos);
+  // Covisibility masks, where given, are the better fact.
+  f.unseen_fraction = 0.35;
+  EXPECT_TRUE(MakePlan(f).Runs("expansion"));
 }
 
 TEST(PlannerTest, NoDynamicContentMeansNoMotion) {

@@ -1,0 +1,342 @@
+// `pano4d bench datasets`: every scene of a benchmark root through `pano4d
+// run --eval`, in a table beside the published rows (bench.h).
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "evaluation/evaluate.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/json.h"
+#include "src/core/log.h"
+#include "src/core/strings.h"
+#include "src/core/subprocess.h"
+#include "src/core/workspace.h"
+#include "src/datasets/dycheck_dataset.h"
+#include "src/datasets/kubric_dataset.h"
+#include "src/datasets/nvidia_dataset.h"
+#include "src/pipeline/bench.h"
+#include "src/pipeline/eval.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+// The nine metric columns of the evaluation tables (kMetricKeys' first).
+constexpr std::size_t kTableMetrics = 9;
+
+struct Entry {
+  std::string scene, suite;
+  std::string status;  // "done" or "failed"
+  std::string error;
+  double seconds = 0, peak_memory_mib = 0;
+  bool resumed = false;
+  MetricRow values;
+  std::vector<std::string> command;
+
+  nlohmann::json ToJson() const {
+    nlohmann::json metrics = nlohmann::json::object();
+    for (std::size_t k = 0; k < kNumMetrics; ++k)
+      metrics[kMetricKeys[k]] =
+          values[k] ? nlohmann::json(*values[k]) : nlohmann::json();
+    return {{"scene", scene},     {"suite", suite},
+            {"status", status},   {"error", error},
+            {"seconds", seconds}, {"peak_memory_mib", peak_memory_mib},
+            {"metrics", metrics}, {"command", command}};
+  }
+};
+
+MetricRow MetricsOf(const nlohmann::json& mean) {
+  MetricRow row;
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    const char* key = kMetricKeys[k];
+    if (mean.contains(key) && mean[key].is_number())
+      row[k] = mean[key].get<double>();
+  }
+  return row;
+}
+
+// The benchmark file's kind for a suite (synthetic scenes have none).
+std::string KindOf(const std::string& suite) {
+  if (suite == "kubric") return "kubric4d";
+  if (suite == "synth") return "";
+  return suite;
+}
+
+int ProtocolFactor(const std::string& suite) {
+  return suite == "kubric" ? 1 : kEvaluationFactor;
+}
+
+// The line of the log that says why the run failed.
+std::string ErrorOf(const fs::path& log, const ProcessResult& r) {
+  std::istringstream lines(LastLines(log, 40));
+  std::string line, error;
+  while (std::getline(lines, line))
+    if (line.find("error") != std::string::npos) error = line;
+  if (error.empty()) error = LastLines(log, 1);
+  return r.How() + ": " + error;
+}
+
+Entry RunScene(const fs::path& dir, const std::string& suite,
+               const BenchDatasetsOptions& o, const fs::path& executable) {
+  Entry e;
+  e.scene = dir.filename().string();
+  e.suite = suite;
+  const Workspace ws(o.workspace / e.scene);
+  e.command = {executable.string(),
+               "run",
+               "--dataset",
+               fs::absolute(dir).string(),
+               "--workspace",
+               fs::absolute(ws.root()).string(),
+               "--eval",
+               "--factor",
+               std::to_string(ProtocolFactor(suite))};
+  if (o.iterations > 0) {
+    e.command.push_back("--iterations");
+    e.command.push_back(std::to_string(o.iterations));
+  }
+  if (!o.lpips_weights.empty()) {
+    e.command.push_back("--lpips-weights");
+    e.command.push_back(fs::absolute(o.lpips_weights).string());
+  }
+  const fs::path entry_file = ws.pano4d() / "bench_entry.json";
+  if (fs::exists(entry_file)) {
+    const nlohmann::json j = ReadJson(entry_file);
+    if (j.value("status", "") == "done" &&
+        j.value("command", std::vector<std::string>{}) == e.command) {
+      e.status = "done";
+      e.resumed = true;
+      e.seconds = j.value("seconds", 0.0);
+      e.peak_memory_mib = j.value("peak_memory_mib", 0.0);
+      e.values = MetricsOf(j.value("metrics", nlohmann::json::object()));
+      return e;
+    }
+  }
+  const fs::path log = ws.pano4d() / "logs" / "bench_run.log";
+  const ProcessResult r = RunProcess(e.command, log);
+  e.seconds = r.seconds;
+  e.peak_memory_mib = r.peak_memory_mib;
+  if (!r.ok()) {
+    e.status = "failed";
+    e.error = ErrorOf(log, r);
+  } else {
+    try {
+      const nlohmann::json m = ReadJson(ws.metrics() / "metrics.json");
+      e.values = MetricsOf(GetJson<nlohmann::json>(
+          m, "mean", (ws.metrics() / "metrics.json").string()));
+      e.status = "done";
+    } catch (const Error& error) {
+      e.status = "failed";
+      e.error = error.what();
+    }
+  }
+  WriteJson(entry_file, e.ToJson());
+  return e;
+}
+
+std::string Cell(const std::optional<double>& v, std::size_t key) {
+  if (!v) return "-";
+  const bool psnr =
+      std::string(kMetricKeys[key]).find("psnr") != std::string::npos;
+  return StringPrintf(psnr ? "%.2f" : "%.3f", *v);
+}
+
+std::string MarkdownRow(const std::string& scene, const std::string& suite,
+                        const std::string& method, const MetricRow& values,
+                        const std::string& seconds, const std::string& memory) {
+  std::string row = "| " + scene + " | " + suite + " | " + method + " |";
+  for (std::size_t k = 0; k < kTableMetrics; ++k)
+    row += " " + Cell(values[k], k) + " |";
+  return row + " " + seconds + " | " + memory + " |\n";
+}
+
+std::string CsvField(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  if (s.find_first_of(",\"") == std::string::npos) return s;
+  std::string quoted = "\"";
+  for (const char c : s)
+    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+std::string CsvRow(const std::string& scene, const std::string& suite,
+                   const std::string& method, const std::string& source,
+                   const std::string& status, const std::string& error,
+                   const MetricRow& values, const std::string& seconds,
+                   const std::string& memory) {
+  std::string row = CsvField(scene) + "," + suite + "," + CsvField(method) +
+                    "," + CsvField(source) + "," + status + "," +
+                    CsvField(error);
+  for (std::size_t k = 0; k < kNumMetrics; ++k)
+    row += "," + (values[k] ? StringPrintf("%.6f", *values[k]) : std::string());
+  return row + "," + seconds + "," + memory + "\n";
+}
+
+}  // namespace
+
+std::string SuiteOf(const fs::path& dir) {
+  if (LooksLikeDyCheck(dir)) {
+    const fs::path meta = dir / "synth.json";
+    const bool synth = fs::exists(meta) &&
+                       ReadJson(meta).value("generator", "") == "pano4d synth";
+    return synth ? "synth" : "dycheck";
+  }
+  if (LooksLikeNvidia(dir)) return "nvidia";
+  if (LooksLikeKubric4D(dir)) return "kubric";
+  return "";
+}
+
+BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
+  if (!fs::is_directory(o.root))
+    throw Error::In(o.root.string(), "is not a folder of scenes (--root)");
+  const std::vector<std::string> suites = {"nvidia", "dycheck", "kubric",
+                                           "synth"};
+  if (!o.suite.empty() &&
+      std::find(suites.begin(), suites.end(), o.suite) == suites.end()) {
+    throw Error("--suite", "", o.suite, "use nvidia, dycheck, kubric or synth");
+  }
+  // The scenes, by folder name.
+  std::vector<std::pair<fs::path, std::string>> scenes;
+  std::vector<fs::path> dirs;
+  for (const auto& entry : fs::directory_iterator(o.root))
+    if (entry.is_directory()) dirs.push_back(entry.path());
+  std::sort(dirs.begin(), dirs.end());
+  for (const fs::path& dir : dirs) {
+    const std::string suite = SuiteOf(dir);
+    if (suite.empty() || (!o.suite.empty() && suite != o.suite)) continue;
+    const std::string name = dir.filename().string();
+    if (!o.scenes.empty() &&
+        std::find(o.scenes.begin(), o.scenes.end(), name) == o.scenes.end())
+      continue;
+    scenes.emplace_back(dir, suite);
+  }
+  for (const std::string& wanted : o.scenes) {
+    if (std::none_of(scenes.begin(), scenes.end(), [&](const auto& s) {
+          return s.first.filename() == wanted;
+        })) {
+      throw Error(
+          o.root.string(), "--scenes", wanted,
+          "no scene folder of that name" +
+              (o.suite.empty() ? std::string() : " in suite " + o.suite));
+    }
+  }
+  if (scenes.empty()) {
+    throw Error::In(
+        o.root.string(),
+        "holds no scene folder pano4d reads" +
+            (o.suite.empty() ? std::string() : " of suite " + o.suite));
+  }
+  const fs::path executable =
+      o.executable.empty() ? fs::read_symlink("/proc/self/exe") : o.executable;
+  EnsureDirectory(o.workspace);
+
+  std::vector<Entry> entries;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const auto& [dir, suite] = scenes[i];
+    PANO4D_LOG(kInfo) << "bench datasets: [" << i + 1 << "/" << scenes.size()
+                      << "] " << dir.filename().string() << " (" << suite
+                      << ") ...";
+    entries.push_back(RunScene(dir, suite, o, executable));
+    const Entry& e = entries.back();
+    PANO4D_LOG(kInfo) << "bench datasets: " << e.scene << ": "
+                      << (e.resumed ? "complete from an earlier run" : e.status)
+                      << (e.error.empty() ? "" : " (" + e.error + ")") << ", "
+                      << e.seconds << " s";
+  }
+
+  BenchResult result;
+  std::ostringstream md, csv;
+  md << "# pano4d bench datasets: " << o.root.string() << "\n\n"
+     << "Each scene: `pano4d run --dataset <scene> --eval` at its protocol's "
+        "factor"
+     << (o.iterations > 0 ? ", " + std::to_string(o.iterations) + " iterations"
+                          : std::string(", the default schedule"))
+     << "; seconds and peak memory of that run. Published rows follow each "
+        "scene where a source gives per-scene numbers.\n\n";
+  const std::string head =
+      "| Scene | Suite | Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | "
+      "mLPIPS | uPSNR | uSSIM | uLPIPS | Seconds | Peak MiB |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md << head;
+  csv << "scene,suite,method,source,status,error";
+  for (const char* key : kMetricKeys) csv << "," << key;
+  csv << ",seconds,peak_memory_mib\n";
+  std::map<std::string, nlohmann::json> benchmarks;
+  for (const Entry& e : entries) {
+    const std::string kind = KindOf(e.suite);
+    if (!benchmarks.count(e.suite))
+      benchmarks[e.suite] = kind.empty()
+                                ? nlohmann::json()
+                                : BenchmarkMeta(DatasetsMetaDir(), kind);
+    const std::string seconds = StringPrintf("%.0f", e.seconds);
+    const std::string memory = StringPrintf("%.0f", e.peak_memory_mib);
+    md << MarkdownRow(
+        e.scene, e.suite,
+        e.status == "done" ? "pano4d" : "pano4d: " + e.status + ": " + e.error,
+        e.values, seconds, memory);
+    csv << CsvRow(e.scene, e.suite, "pano4d", "pano4d", e.status, e.error,
+                  e.values, seconds, memory);
+    for (const PublishedRow& p : PublishedRows(benchmarks[e.suite], e.scene)) {
+      if (p.mean) continue;
+      md << MarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
+                        p.values, "", "");
+      csv << CsvRow(e.scene, e.suite, p.method, p.source, "published", "",
+                    p.values, "", "");
+    }
+    result.rows.push_back(e.ToJson());
+  }
+
+  // Means per suite: pano4d's over the scenes that finished here, the
+  // published means over each benchmark's own scene list.
+  md << "\n## Means per suite\n\npano4d's mean is over the scenes of this run "
+        "that finished; a published mean is over its benchmark's scenes "
+        "(datasets_meta/), which may be more.\n\n"
+     << head;
+  for (const std::string& suite : suites) {
+    std::vector<const Entry*> done;
+    int total = 0;
+    for (const Entry& e : entries) {
+      if (e.suite != suite) continue;
+      ++total;
+      if (e.status == "done") done.push_back(&e);
+    }
+    if (total == 0) continue;
+    MetricRow mean;
+    for (std::size_t k = 0; k < kNumMetrics; ++k) {
+      double sum = 0;
+      int n = 0;
+      for (const Entry* e : done)
+        if (e->values[k]) sum += *e->values[k], ++n;
+      if (n == static_cast<int>(done.size()) && n > 0) mean[k] = sum / n;
+    }
+    double seconds = 0, memory = 0;
+    for (const Entry* e : done) {
+      seconds += e->seconds;
+      memory = std::max(memory, e->peak_memory_mib);
+    }
+    const std::string label =
+        StringPrintf("mean (%zu of %d scenes)", done.size(), total);
+    const std::string s =
+        done.empty() ? "" : StringPrintf("%.0f", seconds / done.size());
+    const std::string m = done.empty() ? "" : StringPrintf("%.0f", memory);
+    md << MarkdownRow("mean", suite, "pano4d, " + label, mean, s, m);
+    csv << CsvRow("mean", suite, "pano4d", label, "mean", "", mean, s, m);
+    for (const PublishedRow& p : PublishedRows(benchmarks[suite], "")) {
+      if (!p.mean) continue;
+      md << MarkdownRow("mean", suite, p.method + " (" + p.source + ")",
+                        p.values, "", "");
+      csv << CsvRow("mean", suite, p.method, p.source, "published", "",
+                    p.values, "", "");
+    }
+  }
+  md << "\nSeconds of a mean row: per scene; peak memory: the largest.\n";
+  WriteFileAtomically(o.workspace / "datasets.md", md.str());
+  WriteFileAtomically(o.workspace / "datasets.csv", csv.str());
+  result.table = md.str() + "\nwritten to " +
+                 (o.workspace / "datasets.md").string() + " and datasets.csv\n";
+  return result;
+}
+
+}  // namespace pano4d
