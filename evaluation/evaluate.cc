@@ -336,8 +336,8 @@ std::vector<PublishedRow> PublishedRows(const Json& benchmark,
     // The source's first words name it in the table ("DynamicNeRF README").
     std::string label = source.value("source", "published");
     label = label.substr(0, label.find(" ("));
-    for (const auto& [key, list] :
-         source.value("scenes", Json::object()).items()) {
+    const Json scenes = source.value("scenes", Json::object());
+    for (const auto& [key, list] : scenes.items()) {
       const std::string k = Normalised(key);
       if (name.size() < k.size() ||
           name.compare(name.size() - k.size(), k.size(), k) != 0)

@@ -112,6 +112,55 @@ TEST(EvaluateTest, JsonMarkdownAndCsvAgree) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 17);
 }
 
+// A scene's published rows come from the per-scene sources and sit apart
+// from the means over a benchmark's scenes.
+TEST(EvaluateTest, PublishedRowsOfThisSceneApartFromTheMeans) {
+  const Json nvidia = BenchmarkMeta(kMeta, "nvidia");
+  ASSERT_TRUE(nvidia.is_object());
+  const auto find = [](const std::vector<PublishedRow>& rows,
+                       const std::string& method,
+                       bool mean) -> const PublishedRow* {
+    for (const PublishedRow& r : rows)
+      if (r.method == method && r.mean == mean) return &r;
+    return nullptr;
+  };
+  // The folder name decides the scene: "nvidia-balloon1" is Balloon1.
+  const std::vector<PublishedRow> balloon1 =
+      PublishedRows(nvidia, "nvidia-balloon1");
+  const PublishedRow* dnerf = find(balloon1, "DynamicNeRF", false);
+  ASSERT_NE(dnerf, nullptr);
+  EXPECT_DOUBLE_EQ(*dnerf->values[0], 22.36);  // psnr
+  EXPECT_DOUBLE_EQ(*dnerf->values[2], 0.104);  // lpips
+  EXPECT_FALSE(dnerf->values[1].has_value());  // no SSIM published
+  EXPECT_EQ(dnerf->source, "DynamicNeRF README");
+  EXPECT_DOUBLE_EQ(*find(balloon1, "NSFF", false)->values[0], 21.96);
+  // Means: the source's mean row and the paper's table.
+  EXPECT_DOUBLE_EQ(*find(balloon1, "DynamicNeRF", true)->values[0], 26.10);
+  ASSERT_NE(find(balloon1, "PanoGaussian (Ours)", true), nullptr);
+  EXPECT_EQ(find(balloon1, "PanoGaussian (Ours)", false), nullptr);
+  // Another scene gets its own rows; an unknown one only means.
+  EXPECT_DOUBLE_EQ(
+      *find(PublishedRows(nvidia, "Balloon2"), "DynamicNeRF", false)->values[0],
+      27.06);
+  for (const PublishedRow& r : PublishedRows(nvidia, "my-own-scene"))
+    EXPECT_TRUE(r.mean) << r.method;
+  EXPECT_TRUE(PublishedRows(Json(), "nvidia-balloon1").empty());
+
+  EvaluationResult result;
+  result.kind = "nvidia";
+  result.scene = "nvidia-balloon1";
+  result.mean[0] = 20.0;
+  const std::string md = EvaluationMarkdown(result, balloon1, true);
+  const auto scene = md.find("## This scene");
+  const auto means = md.find("## Means over the benchmark's scenes");
+  ASSERT_NE(scene, std::string::npos) << md;
+  ASSERT_NE(means, std::string::npos) << md;
+  const auto row = md.find("| DynamicNeRF (DynamicNeRF README) | 22.36 |");
+  EXPECT_GT(row, scene);
+  EXPECT_LT(row, means);
+  EXPECT_GT(md.find("| PanoGaussian (Ours) (paper, mean) | 26.75 |"), means);
+}
+
 TEST(EvaluateTest, LpipsColumnsWithWeights) {
   // The narrow AlexNet-topology network of the LPIPS fixture stands in for
   // the real weights, which are not on these machines.
