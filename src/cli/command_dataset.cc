@@ -15,7 +15,7 @@ namespace {
 
 struct DatasetInfoOptions {
   std::string root;
-  int factor = kEvaluationFactor;
+  int factor = kProtocolFactor;
 };
 
 int RunDatasetInfo(const DatasetInfoOptions& options) {

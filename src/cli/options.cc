@@ -193,9 +193,10 @@ CLI::Option* AddDatasetOption(CLI::App* app, std::filesystem::path* dataset) {
 
 void AddFactorOption(CLI::App* app, int* factor) {
   app->add_option("--factor", *factor,
-                  "Resolution divisor of a dataset's frames (DyCheck and "
-                  "Nvidia evaluate at 2)")
-      ->check(CLI::PositiveNumber)
+                  "Resolution divisor of a dataset's frames; 0: the "
+                  "benchmark's protocol (2 for DyCheck and Nvidia, 1 for "
+                  "Kubric-4D)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 }
 

@@ -96,9 +96,11 @@ std::string SplitDescription(const Dataset& dataset) {
 namespace {
 
 Dataset Detect(const fs::path& root, int factor) {
-  if (LooksLikeDyCheck(root)) return ReadDyCheck(root, factor);
-  if (LooksLikeNvidia(root)) return ReadNvidia(root, factor);
-  if (LooksLikeKubric4D(root)) return ReadKubric4D(root, factor);
+  const int f = factor == kProtocolFactor ? kEvaluationFactor : factor;
+  if (LooksLikeDyCheck(root)) return ReadDyCheck(root, f);
+  if (LooksLikeNvidia(root)) return ReadNvidia(root, f);
+  if (LooksLikeKubric4D(root))
+    return ReadKubric4D(root, factor == kProtocolFactor ? 1 : factor);
   throw Error::In(root.string(),
                   "not a dataset pano4d knows: expected the DyCheck iPhone "
                   "layout (dataset.json, "

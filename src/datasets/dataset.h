@@ -13,8 +13,12 @@ namespace pano4d {
 
 // The resolution divisor the benchmarks evaluate at: DyCheck's covisibility
 // masks exist at 2x only, and the Nvidia protocol scores 480x270 (half of
-// its 960x540 frames). Every stage of a dataset run defaults to it.
+// its 960x540 frames).
 inline constexpr int kEvaluationFactor = 2;
+// A factor that asks for the dataset's protocol: kEvaluationFactor, or 1 for
+// Kubric-4D, which ships one resolution. Every stage of a dataset run
+// defaults to it; LoadDataset resolves it (Dataset::factor says which).
+inline constexpr int kProtocolFactor = 0;
 
 // One loader interface for every benchmark: a dataset is a list of frames in
 // a training and a validation split, each with its camera and files.
@@ -74,6 +78,6 @@ std::string SplitDescription(const Dataset& dataset);
 // Detects the layout of `root` and loads it; throws pano4d::Error naming the
 // folder and saying which layouts were looked for when none matches.
 Dataset LoadDataset(const std::filesystem::path& root,
-                    int factor = kEvaluationFactor);
+                    int factor = kProtocolFactor);
 
 }  // namespace pano4d

@@ -316,8 +316,9 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
 }  // namespace
 
 void DepthOptions::Check() const {
-  if (factor < 1) {
-    throw Error("--factor", "", std::to_string(factor), "must be >= 1");
+  if (factor < 0) {
+    throw Error("--factor", "", std::to_string(factor),
+                "must be >= 1, or 0 for the dataset's protocol");
   }
   if (holdout < 0 || holdout == 1) {
     throw Error("--holdout", "", std::to_string(holdout),

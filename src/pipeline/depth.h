@@ -26,7 +26,7 @@ namespace pano4d {
 struct DepthOptions {
   std::filesystem::path dataset;    // empty: the workspace's COLMAP model
   std::filesystem::path depth_dir;  // <frame>.npy/.png/.tiff/.exr; empty: none
-  int factor = kEvaluationFactor;   // a dataset's resolution divisor
+  int factor = kProtocolFactor;     // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side
   // (time; the fit's frames are usually smaller).

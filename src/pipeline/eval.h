@@ -18,7 +18,7 @@ struct EvalOptions {
   std::filesystem::path out;            // empty: <renders>/metrics
   std::filesystem::path lpips_weights;  // empty: LPIPS reads n/a
   std::string split = "val";
-  int factor = kEvaluationFactor;  // the dataset's resolution divisor
+  int factor = kProtocolFactor;  // the dataset's resolution divisor
 };
 
 struct EvalSummary {

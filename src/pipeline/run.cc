@@ -236,6 +236,10 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
                 "out or give the same folder");
   }
   o.fit.Check();
+  o.depth.Check();
+  // One factor for every stage: the protocol's, unless given.
+  if (!o.dataset.empty())
+    o.depth.factor = LoadDataset(o.dataset, o.depth.factor).factor;
   EnsureDirectory(ws.pano4d());
   if (!o.colmap.empty()) AdoptColmapWorkspace(ws);
   PlanFacts facts = GatherFacts(o);

@@ -21,7 +21,7 @@ struct SfmStageOptions {
   // A dataset whose training frames keep their cameras (at `factor`, named
   // <id>.png); colmap point_triangulator adds the sparse points.
   std::filesystem::path dataset;
-  int factor = kEvaluationFactor;  // the dataset's resolution divisor
+  int factor = kProtocolFactor;  // the dataset's resolution divisor
   // A dataset whose cameras to compare the estimate with (ATE, RPE).
   std::filesystem::path compare_gt;
 };

@@ -53,6 +53,9 @@ TEST(KubricDatasetTest, ViewFourTrainsOthersValidateInOpenCvAxes) {
   EXPECT_DOUBLE_EQ(d.fps, 24.0);
   EXPECT_EQ(d.factor, 1);
   EXPECT_THROW(LoadDataset(dir.path(), 2), Error);  // no 2x files exist
+  // The protocol's factor, the default, is Kubric-4D's one resolution.
+  EXPECT_EQ(LoadDataset(dir.path(), kProtocolFactor).factor, 1);
+  EXPECT_EQ(LoadDataset(dir.path()).factor, 1);
   for (const auto* split : {&d.train, &d.val}) {
     for (const DatasetFrame& f : *split) {
       EXPECT_DOUBLE_EQ(f.camera.camera.focal_x(), 576.0);

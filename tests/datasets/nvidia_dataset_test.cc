@@ -81,6 +81,12 @@ TEST(NvidiaDatasetTest, LlffPosesBecomeOpenCvCamerasAndTheMonocularProtocol) {
   }
   EXPECT_EQ(d.val[3].rgb, dense / "mv_images" / "00003" / "cam01.jpg");
   EXPECT_EQ(d.val[4].rgb, dense / "gt" / "v000_t004.png");
+  // The scene is the folder holding dense/; the report names the protocol.
+  EXPECT_EQ(d.scene, dir.path().filename().string());
+  EXPECT_EQ(SplitDescription(d),
+            "train: cameras 0..11, 12 frames; val: camera 0, 12 frames; "
+            "480x270 (factor 2)");
+  EXPECT_EQ(LoadDataset(dir.path()).factor, 2);  // the protocol's
 }
 
 TEST(NvidiaDatasetTest, WithoutImagesSizesComeFromHwf) {
