@@ -50,15 +50,15 @@ StageDecision Depth(const PlanFacts& f) {
             "depth given: the dataset's depth maps are used as they are (the "
             "stage only lists the frames)"};
   }
-  return {
-      "depth", true, false,
-      std::string(f.input == InputKind::kDataset ? "no depth in the dataset: "
-                                                 : "no depth: ") +
-          "plane-sweep stereo over the training frames that see the same "
-          "part of the scene, on " +
-          (f.input == InputKind::kDataset ? "the dataset's cameras"
-                                          : "the COLMAP poses") +
-          ", checked against the sparse points"};
+  return {"depth", true, false,
+          std::string(f.input == InputKind::kDataset
+                          ? "not every training frame has dataset depth: "
+                          : "no depth: ") +
+              "plane-sweep stereo over the training frames that see the same "
+              "part of the scene, on " +
+              (f.input == InputKind::kDataset ? "the dataset's cameras"
+                                              : "the COLMAP poses") +
+              ", checked against the sparse points"};
 }
 
 StageDecision Motion(const PlanFacts& f) {
