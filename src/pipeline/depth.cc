@@ -156,6 +156,20 @@ std::vector<DepthSample> SfmSamples(const ColmapModel& model,
   std::vector<DepthSample> samples;
   for (const ColmapImage& image : model.images) {
     if (fs::path(image.name).stem().string() != f.name) continue;
+    // The points' pixels belong to the model's image size.
+    const ColmapCamera* camera = model.FindCamera(image.camera_id);
+    if (camera &&
+        (camera->width != static_cast<std::uint64_t>(f.camera.camera.width) ||
+         camera->height !=
+             static_cast<std::uint64_t>(f.camera.camera.height))) {
+      throw Error(
+          image.name, "size",
+          std::to_string(camera->width) + "x" + std::to_string(camera->height),
+          "the SfM model's image differs from the frame (" +
+              std::to_string(f.camera.camera.width) + "x" +
+              std::to_string(f.camera.camera.height) +
+              "); run `pano4d sfm --dataset` at the same --factor");
+    }
     for (const ColmapPoint2D& p : image.points2D) {
       if (!p.HasPoint3D()) continue;
       const ColmapPoint3D* point = model.FindPoint3D(p.point3D_id);

@@ -139,9 +139,8 @@ bool FramesFromThisInput(const Workspace& ws, const RunOptions& o,
 
 // What would stop a stage of the plan half way, checked before the first:
 // the colmap executable for sfm, the LPIPS weights for eval, a depth map per
-// training frame in
-// --depth-dir (for a COLMAP model the frames are known after sfm; then only
-// the folder is checked).
+// training frame in --depth-dir (for a COLMAP model the frames are known
+// only after sfm; then only the folder is checked).
 void CheckPlanCanRun(const RunOptions& o, const Plan& plan) {
   if (plan.Runs("sfm")) ColmapRunner check(o.sfm.colmap);
   if (plan.Runs("eval") && !o.lpips_weights.empty())

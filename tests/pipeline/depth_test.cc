@@ -154,6 +154,41 @@ TEST_F(DepthStageTest, ExternalDepthIsAlignedToTheSparsePoints) {
   }
 }
 
+// A dataset without depth: stereo on its own cameras, bounded and checked
+// by the sparse points of a model at the same factor; a model at another
+// size is refused by name.
+TEST_F(DepthStageTest, ADatasetWithoutDepthGetsStereoOnItsCameras) {
+  const fs::path no_depth = dir_->path() / "no_depth";
+  if (!fs::exists(no_depth)) {
+    fs::copy(dir_->path() / "tiny", no_depth, fs::copy_options::recursive);
+    fs::remove_all(no_depth / "depth");
+  }
+  const Workspace ws = ColmapWorkspace("dataset_stereo");
+  DepthOptions o;
+  o.dataset = no_depth;
+  o.factor = 2;
+  const DepthSummary s = RunDepth(ws, o);
+  EXPECT_EQ(s.frames.depth_source, kDepthFromStereo);
+  EXPECT_EQ(s.frames.dataset_factor, 2);
+  EXPECT_EQ(s.frames.val.size(), 16u);  // the dataset's split, kept
+  EXPECT_GT(s.with_depth, 0);
+  const Json stereo = ReadJson(ws.depth() / "stereo.json");
+  ASSERT_EQ(stereo.size(), static_cast<std::size_t>(s.with_depth));
+  for (const Json& frame : stereo) {
+    ASSERT_TRUE(frame.contains("check_median_relative_error")) << frame;
+    EXPECT_LT(frame["check_median_relative_error"].get<double>(), 0.05)
+        << frame;
+  }
+  o.factor = 1;
+  try {
+    RunDepth(ws, o);
+    FAIL() << "a model at another size was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--factor"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(DepthStageTest, BadOptionsAreRefusedBeforeAnyWork) {
   DepthOptions o;
   o.holdout = 1;
