@@ -381,14 +381,15 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   if (!o.dataset.empty()) {
     const Dataset ds = LoadDataset(o.dataset, o.factor);
     const std::string source = DepthSourceFor(HasDepth(ds), o.depth_dir);
-    frames = FramesFromDataset(ws, o, ds, source == kDepthFromDataset);
-    frames.depth_source = source;
-    ComputeMissingMasks(ws.dynamic_masks(), &frames.train);
-    // The sparse points of `pano4d sfm --dataset`, at the same factor.
-    if (frames.depth_source != kDepthFromDataset) {
+    // The sparse points of `pano4d sfm --dataset`, at the same factor, read
+    // first: without them nothing below can finish.
+    if (source != kDepthFromDataset) {
       fs::path model_dir, images;
       model = ReadSfmModel(ws, &model_dir, &images);
     }
+    frames = FramesFromDataset(ws, o, ds, source == kDepthFromDataset);
+    frames.depth_source = source;
+    ComputeMissingMasks(ws.dynamic_masks(), &frames.train);
   } else {
     frames = FramesFromWorkspace(ws, o, &model);
     frames.depth_source = DepthSourceFor(false, o.depth_dir);
