@@ -13,6 +13,7 @@
 #include "src/core/strings.h"
 #include "src/core/subprocess.h"
 #include "src/core/workspace.h"
+#include "src/datasets/dataset.h"
 #include "src/datasets/dycheck_dataset.h"
 #include "src/datasets/kubric_dataset.h"
 #include "src/datasets/nvidia_dataset.h"
@@ -64,10 +65,6 @@ std::string KindOf(const std::string& suite) {
   return suite;
 }
 
-int ProtocolFactor(const std::string& suite) {
-  return suite == "kubric" ? 1 : kEvaluationFactor;
-}
-
 // The line of the log that says why the run failed.
 std::string ErrorOf(const fs::path& log, const ProcessResult& r) {
   std::istringstream lines(LastLines(log, 40));
@@ -84,6 +81,15 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   e.scene = dir.filename().string();
   e.suite = suite;
   const Workspace ws(o.workspace / e.scene);
+  // The protocol's factor, written out so that the entry says it.
+  int factor = kProtocolFactor;
+  try {
+    factor = LoadDataset(dir, kProtocolFactor).factor;
+  } catch (const Error& error) {
+    e.status = "failed";
+    e.error = error.what();
+    return e;
+  }
   e.command = {executable.string(),
                "run",
                "--dataset",
@@ -92,7 +98,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
                fs::absolute(ws.root()).string(),
                "--eval",
                "--factor",
-               std::to_string(ProtocolFactor(suite))};
+               std::to_string(factor)};
   if (o.iterations > 0) {
     e.command.push_back("--iterations");
     e.command.push_back(std::to_string(o.iterations));
