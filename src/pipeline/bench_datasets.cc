@@ -108,8 +108,13 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
     e.command.push_back(fs::absolute(o.lpips_weights).string());
   }
   const fs::path entry_file = ws.pano4d() / "bench_entry.json";
-  if (fs::exists(entry_file)) {
-    const nlohmann::json j = ReadJson(entry_file);
+  nlohmann::json j;
+  try {
+    if (fs::exists(entry_file)) j = ReadJson(entry_file);
+  } catch (const Error& error) {  // unreadable: run the scene again
+    PANO4D_LOG(kWarning) << "bench datasets: " << error.what();
+  }
+  if (j.is_object()) {
     if (j.value("status", "") == "done" &&
         j.value("command", std::vector<std::string>{}) == e.command) {
       e.status = "done";
