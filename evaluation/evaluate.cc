@@ -43,23 +43,12 @@ std::string Size(const Image& image) {
   return std::to_string(image.width()) + "x" + std::to_string(image.height());
 }
 
-// Metric values as JSON: null when unavailable or not finite (PSNR of
-// identical images is +inf, which JSON cannot hold; the notes say so).
-Json Value(const std::optional<double>& v) {
-  return v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
-}
-
 std::string Cell(const std::optional<double>& v, const char* format) {
   if (!v) return "n/a";
   if (!std::isfinite(*v)) return *v > 0 ? "inf" : "-inf";
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), format, *v);
   return buffer;
-}
-
-const char* FormatOf(std::size_t key) {
-  const std::string name = kMetricKeys[key];
-  return name.find("psnr") != std::string::npos ? "%.2f" : "%.3f";
 }
 
 std::string BenchmarkFile(const std::string& kind) {
@@ -83,11 +72,7 @@ PublishedRow RowOf(const Json& row, const std::string& source, bool mean) {
   r.method = row.value("method", "?");
   r.source = source;
   r.mean = mean;
-  for (std::size_t k = 0; k < kNumMetrics; ++k) {
-    const char* key = kMetricKeys[k];
-    if (row.contains(key) && row[key].is_number())
-      r.values[k] = row[key].get<double>();
-  }
+  r.values = MetricRowFromJson(row);
   return r;
 }
 
@@ -98,7 +83,7 @@ void AppendRows(std::ostringstream& out,
     out << "| " << row->method << " (" << row->source << ") |";
     for (std::size_t k = 0; k < 9; ++k) {
       out << " "
-          << (row->values[k] ? Cell(row->values[k], FormatOf(k))
+          << (row->values[k] ? Cell(row->values[k], MetricFormat(k))
                              : std::string("-"))
           << " |";
     }
@@ -111,6 +96,30 @@ const char* kTableHead =
     "uSSIM | uLPIPS |\n|---|---|---|---|---|---|---|---|---|---|\n";
 
 }  // namespace
+
+Json MetricRowJson(const MetricRow& row) {
+  Json j = Json::object();
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    const std::optional<double>& v = row[k];
+    j[kMetricKeys[k]] = v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
+  }
+  return j;
+}
+
+MetricRow MetricRowFromJson(const Json& object) {
+  MetricRow row;
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    const char* key = kMetricKeys[k];
+    if (object.contains(key) && object[key].is_number())
+      row[k] = object[key].get<double>();
+  }
+  return row;
+}
+
+const char* MetricFormat(std::size_t key) {
+  const std::string name = kMetricKeys[key];
+  return name.find("psnr") != std::string::npos ? "%.2f" : "%.3f";
+}
 
 EvaluationResult EvaluateRenders(const Dataset& dataset,
                                  const fs::path& renders,
@@ -261,11 +270,10 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
 }
 
 Json EvaluationJson(const EvaluationResult& r) {
-  Json mean = Json::object(), used = Json::object();
-  for (std::size_t k = 0; k < kNumMetrics; ++k) {
-    mean[kMetricKeys[k]] = Value(r.mean[k]);
+  const Json mean = MetricRowJson(r.mean);
+  Json used = Json::object();
+  for (std::size_t k = 0; k < kNumMetrics; ++k)
     used[kMetricKeys[k]] = r.frames_used[k];
-  }
   return Json{{"dataset", r.dataset},      {"scene", r.scene},
               {"protocol", r.protocol},    {"kind", r.kind},
               {"split", r.split},          {"factor", r.factor},
@@ -300,7 +308,7 @@ std::string EvaluationMarkdown(const EvaluationResult& r,
     (row.mean ? mean_rows : scene_rows).push_back(&row);
   out << "## This scene\n\n" << kTableHead << "| pano4d |";
   for (std::size_t k = 0; k < 9; ++k)
-    out << " " << Cell(r.mean[k], FormatOf(k)) << " |";
+    out << " " << Cell(r.mean[k], MetricFormat(k)) << " |";
   out << "\n";
   AppendRows(out, scene_rows);
   if (scene_rows.empty())

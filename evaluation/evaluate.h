@@ -23,6 +23,14 @@ inline constexpr std::size_t kNumMetrics = kMetricKeys.size();
 // mask, an empty mask in this frame, no LPIPS weights).
 using MetricRow = std::array<std::optional<double>, kNumMetrics>;
 
+// A row as JSON, keyed by kMetricKeys: null where a value is unavailable or
+// not finite (PSNR of identical images is +inf, which JSON cannot hold); and
+// back (numbers only; other keys ignored).
+nlohmann::json MetricRowJson(const MetricRow& row);
+MetricRow MetricRowFromJson(const nlohmann::json& object);
+// printf format of a metric's table cell: 2 decimals for PSNR, 3 otherwise.
+const char* MetricFormat(std::size_t key);
+
 struct FrameMetrics {
   std::string id;
   int camera_id = 0;

@@ -37,26 +37,13 @@ struct Entry {
   std::vector<std::string> command;
 
   nlohmann::json ToJson() const {
-    nlohmann::json metrics = nlohmann::json::object();
-    for (std::size_t k = 0; k < kNumMetrics; ++k)
-      metrics[kMetricKeys[k]] =
-          values[k] ? nlohmann::json(*values[k]) : nlohmann::json();
+    const nlohmann::json metrics = MetricRowJson(values);
     return {{"scene", scene},     {"suite", suite},
             {"status", status},   {"error", error},
             {"seconds", seconds}, {"peak_memory_mib", peak_memory_mib},
             {"metrics", metrics}, {"command", command}};
   }
 };
-
-MetricRow MetricsOf(const nlohmann::json& mean) {
-  MetricRow row;
-  for (std::size_t k = 0; k < kNumMetrics; ++k) {
-    const char* key = kMetricKeys[k];
-    if (mean.contains(key) && mean[key].is_number())
-      row[k] = mean[key].get<double>();
-  }
-  return row;
-}
 
 // The benchmark file's kind for a suite (synthetic scenes have none).
 std::string KindOf(const std::string& suite) {
@@ -121,7 +108,8 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
       e.resumed = true;
       e.seconds = j.value("seconds", 0.0);
       e.peak_memory_mib = j.value("peak_memory_mib", 0.0);
-      e.values = MetricsOf(j.value("metrics", nlohmann::json::object()));
+      e.values =
+          MetricRowFromJson(j.value("metrics", nlohmann::json::object()));
       return e;
     }
   }
@@ -135,7 +123,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   } else {
     try {
       const nlohmann::json m = ReadJson(ws.metrics() / "metrics.json");
-      e.values = MetricsOf(GetJson<nlohmann::json>(
+      e.values = MetricRowFromJson(GetJson<nlohmann::json>(
           m, "mean", (ws.metrics() / "metrics.json").string()));
       e.status = "done";
     } catch (const Error& error) {
@@ -148,10 +136,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
 }
 
 std::string Cell(const std::optional<double>& v, std::size_t key) {
-  if (!v) return "-";
-  const bool psnr =
-      std::string(kMetricKeys[key]).find("psnr") != std::string::npos;
-  return StringPrintf(psnr ? "%.2f" : "%.3f", *v);
+  return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
 }
 
 std::string MarkdownRow(const std::string& scene, const std::string& suite,

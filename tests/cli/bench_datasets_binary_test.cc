@@ -16,11 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
-const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
-
-int RunPano4d(const std::string& args, const fs::path& log) {
-  return testing::RunLogged(kBinary + " " + args, log);
-}
+using testing::RunPano4d;
 
 TEST(BenchDatasetsTest, EverySceneIsARowAndASecondRunResumes) {
   testing::TempDir dir;

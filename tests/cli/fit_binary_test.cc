@@ -27,11 +27,10 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
-const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
+using testing::RunPano4d;
 
-int RunPano4d(const std::string& args, const fs::path& log) {
-  return testing::RunLogged(kBinary + " " + args, log);
-}
+// The binary itself, for the kill -9 test that spawns it directly.
+const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
 
 class FitBinaryTest : public ::testing::Test {
  protected:

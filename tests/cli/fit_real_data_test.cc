@@ -17,10 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
-int RunPano4d(const std::string& args, const fs::path& log) {
-  return testing::RunLogged(std::string(PANO4D_BINARY_DIR) + "/pano4d " + args,
-                            log);
-}
+using testing::RunPano4d;
 
 // 'path', for a shell (built with +=: GCC 12 warns falsely on
 // "literal" + std::string&&).

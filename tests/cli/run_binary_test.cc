@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "src/core/json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -18,16 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
-const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
-
-int RunPano4d(const std::string& args, const fs::path& log) {
-  return testing::RunLogged(kBinary + " " + args, log);
-}
-
-nlohmann::json ReadJsonFile(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using testing::RunPano4d;
 
 const nlohmann::json& Stage(const nlohmann::json& plan,
                             const std::string& name) {
@@ -73,7 +65,7 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
   EXPECT_NE(out.find("sfm        left out  poses given"), std::string::npos)
       << out;
 
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_FALSE(Stage(plan, "sfm")["run"].get<bool>());
   EXPECT_FALSE(Stage(plan, "depth")["run"].get<bool>());
   EXPECT_TRUE(Stage(plan, "motion")["run"].get<bool>());
@@ -85,12 +77,11 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
   EXPECT_EQ(plan["results"]["fit"]["status"], "done");
   EXPECT_EQ(plan["results"]["eval"]["status"], "done");
 
-  const nlohmann::json fit = ReadJsonFile(ws / "pano4d/fit.json");
+  const nlohmann::json fit = ReadJson(ws / "pano4d/fit.json");
   EXPECT_EQ(fit["iterations"], 40);
   EXPECT_GT(fit["motion_bases"].get<int>(), 0);
   EXPECT_FALSE(fit["expansion"]["steps"].empty());
-  const nlohmann::json metrics =
-      ReadJsonFile(ws / "pano4d/metrics/metrics.json");
+  const nlohmann::json metrics = ReadJson(ws / "pano4d/metrics/metrics.json");
   EXPECT_TRUE(metrics["mean"]["mpsnr"].is_number()) << metrics.dump(2);
 
   // Again: nothing is redone.
@@ -100,7 +91,7 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
                 log),
       0)
       << Slurp(log);
-  const nlohmann::json again = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json again = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(again["results"]["depth"]["status"],
             "complete from an earlier run");
   EXPECT_EQ(again["results"]["fit"]["status"], "complete from an earlier run");
@@ -112,9 +103,9 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
                       log),
             0)
       << Slurp(log);
-  EXPECT_EQ(ReadJsonFile(ws / "pano4d/plan.json")["results"]["fit"]["status"],
+  EXPECT_EQ(ReadJson(ws / "pano4d/plan.json")["results"]["fit"]["status"],
             "done");
-  EXPECT_TRUE(ReadJsonFile(ws / "pano4d/fit.json")["expansion"].is_null());
+  EXPECT_TRUE(ReadJson(ws / "pano4d/fit.json")["expansion"].is_null());
   EXPECT_FALSE(fs::exists(ws / "pano4d/expansion"));
 }
 
@@ -128,7 +119,7 @@ TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
                 log),
       0)
       << Slurp(log);
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_FALSE(Stage(plan, "motion")["run"].get<bool>());
   EXPECT_NE(Stage(plan, "motion")["why"].get<std::string>().find(
                 "no dynamic content"),
@@ -138,7 +129,7 @@ TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
       std::string::npos);
   EXPECT_FALSE(Stage(plan, "eval")["run"].get<bool>());
   EXPECT_FALSE(plan["results"].contains("eval"));
-  const nlohmann::json fit = ReadJsonFile(ws / "pano4d/fit.json");
+  const nlohmann::json fit = ReadJson(ws / "pano4d/fit.json");
   EXPECT_EQ(fit["motion_bases"], 0);
   EXPECT_EQ(fit["dynamic_gaussians"], 0);
   EXPECT_TRUE(fit["expansion"].is_null());
@@ -212,8 +203,8 @@ TEST_F(RunBinaryTest, DemoWritesAReportThatEvalReproduces) {
                 log),
       0)
       << Slurp(log);
-  const nlohmann::json reported = ReadJsonFile(report / "metrics.json");
-  const nlohmann::json evaluated = ReadJsonFile(again / "metrics.json");
+  const nlohmann::json reported = ReadJson(report / "metrics.json");
+  const nlohmann::json evaluated = ReadJson(again / "metrics.json");
   for (const char* key : {"psnr", "mpsnr", "upsnr", "ssim", "mssim", "ussim"}) {
     ASSERT_TRUE(reported["mean"][key].is_number()) << key;
     EXPECT_DOUBLE_EQ(reported["mean"][key].get<double>(),
@@ -241,7 +232,7 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
     std::snprintf(name, sizeof(name), "%05d.png", i);
     EXPECT_TRUE(fs::exists(orbit / name)) << name;
   }
-  const nlohmann::json cameras = ReadJsonFile(orbit / "cameras.json");
+  const nlohmann::json cameras = ReadJson(orbit / "cameras.json");
   ASSERT_EQ(cameras["views"].size(), 8u);
   // The camera file renders the same frames again.
   ASSERT_EQ(RunPano4d("render" + w + " --trajectory '" +
@@ -255,7 +246,7 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   }
   // And writes the cameras as it read them, so that every later
   // generation renders the same frames too.
-  EXPECT_EQ(ReadJsonFile(dir_->path() / "again" / "cameras.json")["views"],
+  EXPECT_EQ(ReadJson(dir_->path() / "again" / "cameras.json")["views"],
             cameras["views"]);
   // Bullet time: every view at the time asked for.
   ASSERT_EQ(
@@ -263,7 +254,7 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
       0)
       << Slurp(log);
   for (const auto& v :
-       ReadJsonFile(ws / "pano4d/renders/bullet/cameras.json")["views"])
+       ReadJson(ws / "pano4d/renders/bullet/cameras.json")["views"])
     EXPECT_EQ(v["t"], 2);
   // Bad requests name what is wrong.
   EXPECT_EQ(RunPano4d("render" + w + " --trajectory nowhere.json", log), 1);
@@ -273,7 +264,7 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   EXPECT_NE(Slurp(log).find("--time"), std::string::npos) << Slurp(log);
 
   ASSERT_EQ(RunPano4d("export" + w, log), 0) << Slurp(log);
-  const nlohmann::json frames = ReadJsonFile(ws / "pano4d/frames.json");
+  const nlohmann::json frames = ReadJson(ws / "pano4d/frames.json");
   int plys = 0;
   for (const auto& e : fs::directory_iterator(ws / "pano4d/export/ply"))
     plys += e.path().extension() == ".ply";
@@ -293,7 +284,7 @@ TEST_F(RunBinaryTest, StabilitySuiteFindsNoNonFiniteValue) {
                       log),
             0)
       << Slurp(log);
-  const nlohmann::json j = ReadJsonFile(out);
+  const nlohmann::json j = ReadJson(out);
   EXPECT_EQ(j["non_finite"], 0);
   ASSERT_EQ(j["cases"].size(), 8u) << j.dump(2);
   for (const auto& c : j["cases"]) {

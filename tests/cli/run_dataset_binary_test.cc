@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "colmap_ext/colmap_runner.h"
+#include "src/core/json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -19,18 +20,9 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
-const std::string kBinary = std::string(PANO4D_BINARY_DIR) + "/pano4d";
+using testing::RunPano4d;
 const char* kShortFit =
     " --iterations 40 --expand-every 20 --validate-every 20";
-
-int RunPano4d(const std::string& args, const fs::path& log) {
-  return testing::RunLogged(kBinary + " " + args, log);
-}
-
-nlohmann::json ReadJsonFile(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
 
 const nlohmann::json& Stage(const nlohmann::json& plan,
                             const std::string& name) {
@@ -74,7 +66,7 @@ TEST_F(RunDatasetTest, WithoutDepthItTriangulatesRunsStereoAndEvaluates) {
   ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
 
   // The plan names the source, and the stages did what it said.
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "stereo");
   EXPECT_TRUE(Stage(plan, "sfm")["run"].get<bool>());
   EXPECT_NE(
@@ -82,7 +74,7 @@ TEST_F(RunDatasetTest, WithoutDepthItTriangulatesRunsStereoAndEvaluates) {
       std::string::npos);
   EXPECT_NE(Stage(plan, "depth")["why"].get<std::string>().find("stereo"),
             std::string::npos);
-  const nlohmann::json frames = ReadJsonFile(ws / "pano4d/frames.json");
+  const nlohmann::json frames = ReadJson(ws / "pano4d/frames.json");
   EXPECT_EQ(frames["depth_source"], "stereo");
   EXPECT_TRUE(fs::exists(ws / "pano4d/depth/stereo.json"));
   // SfM worked at the evaluation factor (2x: 64x48), not the full size.
@@ -90,15 +82,14 @@ TEST_F(RunDatasetTest, WithoutDepthItTriangulatesRunsStereoAndEvaluates) {
   EXPECT_EQ(image.cols, 64);
   EXPECT_EQ(image.rows, 48);
   // m* and u* on the dataset's covisibility masks.
-  const nlohmann::json metrics =
-      ReadJsonFile(ws / "pano4d/metrics/metrics.json");
+  const nlohmann::json metrics = ReadJson(ws / "pano4d/metrics/metrics.json");
   EXPECT_TRUE(metrics["mean"]["mpsnr"].is_number()) << metrics.dump(2);
   EXPECT_TRUE(metrics["mean"]["upsnr"].is_number()) << metrics.dump(2);
   EXPECT_EQ(metrics["factor"], 2);
 
   // Again: sfm's steps, depth and fit are complete.
   ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
-  const nlohmann::json again = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json again = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(again["results"]["depth"]["status"],
             "complete from an earlier run");
   EXPECT_EQ(again["results"]["fit"]["status"], "complete from an earlier run");
@@ -124,14 +115,12 @@ TEST_F(RunDatasetTest, DepthDirIsCheckedBeforeWorkThenAlignedToThePoints) {
 
   fs::rename(dir_->path() / "0_00003.npy", maps / "0_00003.npy");
   ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "external");
   EXPECT_NE(Stage(plan, "depth")["why"].get<std::string>().find(maps.string()),
             std::string::npos);
-  EXPECT_EQ(ReadJsonFile(ws / "pano4d/frames.json")["depth_source"],
-            "external");
-  const nlohmann::json alignment =
-      ReadJsonFile(ws / "pano4d/depth/alignment.json");
+  EXPECT_EQ(ReadJson(ws / "pano4d/frames.json")["depth_source"], "external");
+  const nlohmann::json alignment = ReadJson(ws / "pano4d/depth/alignment.json");
   EXPECT_FALSE(alignment.empty());
 }
 
@@ -144,11 +133,11 @@ TEST_F(RunDatasetTest, ASceneWithDepthKeepsItsDepth) {
                 log),
       0)
       << Slurp(log);
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "dataset");
   EXPECT_FALSE(Stage(plan, "sfm")["run"].get<bool>());
   EXPECT_FALSE(fs::exists(ws / "database.db"));
-  EXPECT_EQ(ReadJsonFile(ws / "pano4d/frames.json")["depth_source"], "dataset");
+  EXPECT_EQ(ReadJson(ws / "pano4d/frames.json")["depth_source"], "dataset");
 }
 
 }  // namespace

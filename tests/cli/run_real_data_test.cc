@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "colmap_ext/colmap_runner.h"
+#include "src/core/json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -29,11 +30,6 @@ constexpr double kPsnrFloor = 17.5;
 // relative error per frame); 3 % would mean the cameras or the sweep broke.
 constexpr double kMaxStereoError = 0.03;
 
-nlohmann::json ReadJsonFile(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
-
 TEST(RunRealDataTest, NvidiaBalloon1WithoutDepthReachesTheFloor) {
   if (!FindOnPath("colmap"))
     GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH";
@@ -44,15 +40,14 @@ TEST(RunRealDataTest, NvidiaBalloon1WithoutDepthReachesTheFloor) {
   testing::TempDir dir;
   const fs::path ws = dir / "ws";
   const fs::path log = dir / "run.log";
-  ASSERT_EQ(testing::RunLogged(std::string(PANO4D_BINARY_DIR) +
-                                   "/pano4d run --dataset '" + scene.string() +
+  ASSERT_EQ(testing::RunPano4d("run --dataset '" + scene.string() +
                                    "' --workspace '" + ws.string() +
                                    "' --eval --iterations 300",
                                log),
             0)
       << Slurp(log);
 
-  const nlohmann::json plan = ReadJsonFile(ws / "pano4d/plan.json");
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "stereo");
   EXPECT_TRUE(plan["facts"]["targets_are_training_cameras"].get<bool>());
   for (const auto& s : plan["stages"]) {
@@ -64,7 +59,7 @@ TEST(RunRealDataTest, NvidiaBalloon1WithoutDepthReachesTheFloor) {
   const cv::Mat image = cv::imread((ws / "images" / "00000.png").string());
   EXPECT_EQ(image.cols, 480);
   EXPECT_EQ(image.rows, 270);
-  const nlohmann::json stereo = ReadJsonFile(ws / "pano4d/depth/stereo.json");
+  const nlohmann::json stereo = ReadJson(ws / "pano4d/depth/stereo.json");
   ASSERT_EQ(stereo.size(), 12u);
   for (const auto& frame : stereo) {
     ASSERT_TRUE(frame.contains("check_median_relative_error")) << frame;
@@ -73,8 +68,7 @@ TEST(RunRealDataTest, NvidiaBalloon1WithoutDepthReachesTheFloor) {
         << frame;
   }
 
-  const nlohmann::json metrics =
-      ReadJsonFile(ws / "pano4d/metrics/metrics.json");
+  const nlohmann::json metrics = ReadJson(ws / "pano4d/metrics/metrics.json");
   EXPECT_EQ(metrics["kind"], "nvidia");
   EXPECT_EQ(metrics["frames"], 12);
   EXPECT_GT(metrics["mean"]["psnr"].get<double>(), kPsnrFloor)

@@ -51,4 +51,8 @@ int RunLogged(const std::string& command, const std::filesystem::path& log) {
   return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
 }
 
+int RunPano4d(const std::string& args, const std::filesystem::path& log) {
+  return RunLogged(std::string(PANO4D_BINARY_DIR) + "/pano4d " + args, log);
+}
+
 }  // namespace pano4d::testing

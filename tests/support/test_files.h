@@ -28,5 +28,8 @@ std::string Slurp(const std::filesystem::path& path);
 // Runs `command` in a shell with stdout and stderr to `log`; returns its
 // exit status (-1 when it did not exit normally).
 int RunLogged(const std::string& command, const std::filesystem::path& log);
+// Runs the built pano4d binary with `args` (as a shell splits them), as
+// RunLogged does.
+int RunPano4d(const std::string& args, const std::filesystem::path& log);
 
 }  // namespace pano4d::testing
