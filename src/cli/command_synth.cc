@@ -39,20 +39,27 @@ void AddSynthCommand(CLI::App& app, Action* action) {
                   "of the frame (e.g. 2.5 to test SfM's dynamic masks)")
       ->check(CLI::Range(0.1, 10.0))
       ->capture_default_str();
+  sub->add_flag("--varied", o->synth.varied,
+                "Draw the camera layout from the seed (validation cameras "
+                "40-85 degrees aside at 0.6-2.4 m, a 30-70 degree training "
+                "arc), object sizes, texture scale and an object close to a "
+                "validation camera: scenes the default settings were not "
+                "tuned on");
   sub->callback([action, o] {
     *action = [o] {
       Timer timer;
       const synth::SynthSummary s = synth::GenerateSynthScene(o->synth, o->out);
       std::printf(
           "pano4d synth: %s (%dx%d at 1x, %d training frames, 2 x %d "
-          "validation frames), seed %u%s\n"
+          "validation frames), seed %u%s%s\n"
           "  written to %s in %.1f s (render %.1f s, covisibility %.1f s, "
           "write %.1f s)\n"
           "  unseen fraction of validation pixels (2x): %.1f%% (covisible: "
           "seen in more than %d training views)\n",
           s.preset.name.c_str(), s.preset.width, s.preset.height,
           s.preset.train_frames, s.preset.val_frames, s.seed,
-          s.is_static ? ", static" : "", o->out.c_str(), timer.WallSeconds(),
+          s.is_static ? ", static" : "", s.varied ? ", varied" : "",
+          o->out.c_str(), timer.WallSeconds(),
           s.render_seconds, s.covisibility_seconds, s.write_seconds,
           100.0 * s.unseen_fraction, s.covisibility_threshold);
       return kExitOk;

@@ -11,10 +11,7 @@ namespace pano4d::synth {
 namespace {
 
 constexpr double kDegrees = M_PI / 180.0;
-constexpr double kTrainingRadius = 2.9;  // metres from the target, in plan
-constexpr double kTrainingHeight = 1.45;
 constexpr double kTrainingAzimuth = -90.0;  // the arc's middle, degrees
-constexpr double kTrainingSweep = 28.0;     // half the arc, degrees
 
 // A smooth, seeded sway: a sum of three sinusoids per axis.
 Eigen::Vector3d Sway(double s, double amplitude, std::mt19937& rng_seeded,
@@ -61,11 +58,14 @@ std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
     // Each sway draws from its own generator seeded identically per frame,
     // so the path is a smooth function of s.
     std::mt19937 position_rng(seed * 31U + 7U), aim_rng(seed * 31U + 11U);
+    const Layout& l = scene.layout;
     const double azimuth =
-        (kTrainingAzimuth + kTrainingSweep * (2 * s - 1)) * kDegrees;
-    Eigen::Vector3d eye(scene.target.x() + kTrainingRadius * std::cos(azimuth),
-                        scene.target.y() + kTrainingRadius * std::sin(azimuth),
-                        kTrainingHeight);
+        (kTrainingAzimuth + l.training_half_sweep_degrees * (2 * s - 1)) *
+        kDegrees;
+    Eigen::Vector3d eye(
+        scene.target.x() + l.training_radius * std::cos(azimuth),
+        scene.target.y() + l.training_radius * std::sin(azimuth),
+        l.training_height);
     eye += Sway(s, 0.03, position_rng, 1);
     const Eigen::Vector3d aim = scene.target + Sway(s, 0.06, aim_rng, 2);
     cameras.push_back(LookAt(intrinsics, eye, aim));
@@ -75,18 +75,7 @@ std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
 
 PosedCamera ValidationCamera(const Scene& scene, const Camera& intrinsics,
                              int index) {
-  if (index != 1 && index != 2) {
-    throw Error("synth camera", "index", std::to_string(index),
-                "validation cameras are 1 and 2");
-  }
-  constexpr double kOffset = 75.0;  // degrees from the training arc's middle
-  const double azimuth =
-      (kTrainingAzimuth + (index == 1 ? kOffset : -kOffset)) * kDegrees;
-  const double radius = 2.7;
-  const Eigen::Vector3d eye(scene.target.x() + radius * std::cos(azimuth),
-                            scene.target.y() + radius * std::sin(azimuth),
-                            index == 1 ? 1.15 : 1.85);
-  return LookAt(intrinsics, eye, scene.target);
+  return LookAt(intrinsics, ValidationEye(scene, index), scene.target);
 }
 
 }  // namespace pano4d::synth

@@ -103,6 +103,10 @@ Json SynthSummary::ToJson() const {
            {"unseen_fraction", unseen_fraction}}}};
   // Only when set, so that default scenes keep their bytes.
   if (dynamic_scale != 1.0) j["dynamic_scale"] = dynamic_scale;
+  if (varied) {
+    j["varied"] = true;
+    j["layout"] = layout;
+  }
   return j;
 }
 
@@ -118,12 +122,15 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
   summary.seed = options.seed;
   summary.is_static = options.is_static;
   summary.dynamic_scale = options.dynamic_scale;
+  summary.varied = options.varied;
   EnsureDirectory(out);
   // A rerun replaces everything, so a stale marker must not survive a kill.
   fs::remove(out / "synth.json");
 
   const Scene scene =
-      BuildScene(options.seed, options.is_static, options.dynamic_scale);
+      BuildScene(options.seed, options.is_static, options.dynamic_scale,
+                 options.varied ? VariedLayout(options.seed) : Layout());
+  if (options.varied) summary.layout = scene.layout.ToJson();
   const double f = kFocalPerWidth * preset.width;
   const Camera intrinsics{CameraModelId::kPinhole,
                           preset.width,
@@ -205,10 +212,12 @@ bool EnsureSynthScene(const SynthOptions& o, const fs::path& out) {
   const std::string preset = GetJson<std::string>(j, "preset", json.string());
   const int seed = GetJson<int>(j, "seed", json.string());
   const bool is_static = GetJsonOr<bool>(j, "static", false, json.string());
+  const bool varied = GetJsonOr<bool>(j, "varied", false, json.string());
   if (preset != o.preset || seed != static_cast<int>(o.seed) ||
-      is_static != o.is_static) {
+      is_static != o.is_static || varied != o.varied) {
     throw Error(json.string(), "preset/seed",
-                preset + " seed " + std::to_string(seed),
+                preset + " seed " + std::to_string(seed) +
+                    (varied ? " varied" : ""),
                 "an earlier run made another scene here; use another "
                 "--workspace or remove " +
                     out.string());

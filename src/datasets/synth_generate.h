@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 
 namespace pano4d::synth {
 
@@ -26,6 +26,9 @@ struct SynthOptions {
   std::uint32_t seed = 0;
   bool is_static = false;
   double dynamic_scale = 1.0;  // see BuildScene; > 0
+  // Draw the cameras' layout, sizes, texture scale and a near object from
+  // the seed (VariedLayout, synth_scene.h) instead of the built-in scene's.
+  bool varied = false;
 };
 
 // What was generated. Written to synth.json without the timings, so the
@@ -35,6 +38,8 @@ struct SynthSummary {
   std::uint32_t seed = 0;
   bool is_static = false;
   double dynamic_scale = 1.0;
+  bool varied = false;
+  nlohmann::json layout;  // Layout::ToJson of a varied scene
   std::int64_t val_pixels = 0;     // 2x validation pixels with a surface
   std::int64_t unseen_pixels = 0;  // of those, not covisible
   double unseen_fraction = 0.0;

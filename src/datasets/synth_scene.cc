@@ -4,6 +4,9 @@
 #include <random>
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "src/core/error.h"
 
 namespace pano4d::synth {
 namespace {
@@ -140,8 +143,80 @@ bool IntersectBox(const Eigen::Vector3d& half, bool inside,
 
 }  // namespace
 
-Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
-  const double k = dynamic_scale;
+bool Layout::IsDefault() const { return ToJson() == Layout().ToJson(); }
+
+nlohmann::json Layout::ToJson() const {
+  nlohmann::json j{
+      {"training_half_sweep_degrees", training_half_sweep_degrees},
+      {"training_height", training_height},
+      {"training_radius", training_radius},
+      {"validation_azimuth_degrees",
+       {validation_azimuth_degrees[0], validation_azimuth_degrees[1]}},
+      {"validation_height", {validation_height[0], validation_height[1]}},
+      {"validation_radius", {validation_radius[0], validation_radius[1]}},
+      {"dynamic_scale", dynamic_scale},
+      {"texture_frequency_scale", texture_frequency_scale},
+      {"near_object_camera", near_object_camera}};
+  if (near_object_camera != 0) {
+    j["near_object_distance"] = near_object_distance;
+    j["near_object"] = near_object_is_sphere ? "sphere" : "box";
+    j["near_object_size"] = near_object_size;
+  }
+  return j;
+}
+
+Layout VariedLayout(std::uint32_t seed) {
+  // Its own generator, so that the scene's jitter draws stay as they are.
+  std::mt19937 rng(seed * 2246822519U + 0x5eed);
+  const auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  Layout l;
+  l.training_half_sweep_degrees = uniform(15.0, 35.0);
+  l.training_height = uniform(1.1, 1.9);
+  l.training_radius = uniform(2.5, 3.0);
+  // One camera on each side of the arc, or (one scene in four) both on the
+  // same side, the second 20-45 degrees past the first (at most 110).
+  const bool same_side = uniform(0, 1) < 0.25;
+  const double first = uniform(40.0, 85.0), second = uniform(40.0, 85.0);
+  l.validation_azimuth_degrees[0] = first;
+  l.validation_azimuth_degrees[1] =
+      same_side ? std::min(first + 20.0 + (second - 40.0) * 25.0 / 45.0, 110.0)
+                : -second;
+  for (int i = 0; i < 2; ++i) {
+    l.validation_height[i] = uniform(0.6, 2.4);
+    l.validation_radius[i] = uniform(2.0, 3.0);
+  }
+  l.dynamic_scale = uniform(0.7, 1.5);
+  l.texture_frequency_scale = std::exp(uniform(std::log(0.5), std::log(2.5)));
+  if (uniform(0, 1) < 0.8) {
+    l.near_object_camera = uniform(0, 1) < 0.5 ? 1 : 2;
+    l.near_object_distance = uniform(0.7, 1.3);
+    l.near_object_is_sphere = uniform(0, 1) < 0.5;
+    l.near_object_size = uniform(0.12, 0.3);
+  }
+  return l;
+}
+
+Eigen::Vector3d ValidationEye(const Scene& scene, int index) {
+  if (index != 1 && index != 2) {
+    throw Error("synth camera", "index", std::to_string(index),
+                "validation cameras are 1 and 2");
+  }
+  constexpr double kArcMiddle = -90.0;  // degrees, the -y side
+  const Layout& l = scene.layout;
+  const double azimuth =
+      (kArcMiddle + l.validation_azimuth_degrees[index - 1]) * (M_PI / 180.0);
+  const double radius = l.validation_radius[index - 1];
+  return Eigen::Vector3d(scene.target.x() + radius * std::cos(azimuth),
+                         scene.target.y() + radius * std::sin(azimuth),
+                         l.validation_height[index - 1]);
+}
+
+Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale,
+                 const Layout& layout) {
+  const double k = dynamic_scale * layout.dynamic_scale;
+  const double texture = layout.texture_frequency_scale;
   std::mt19937 rng(seed * 2654435761U + 12345U);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const auto jitter = [&](double amount) {
@@ -149,6 +224,7 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
   };
 
   Scene scene;
+  scene.layout = layout;
   scene.room_min = Eigen::Vector3d(-4, -3, 0);
   scene.room_max = Eigen::Vector3d(4, 3, 3);
   scene.target = Eigen::Vector3d(0.1, 0.8, 0.6);
@@ -169,7 +245,7 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
   room.instance = 1;
   room.material = static_cast<int>(scene.materials.size());
   for (const auto& [hue, pattern] : room_looks) {
-    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 1.5));
+    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 1.5 * texture));
   }
   scene.parts.push_back(room);
 
@@ -184,7 +260,7 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
     part.rest = Rigid3d(Yaw(yaw), at);
     part.instance = next_instance++;
     part.material = static_cast<int>(scene.materials.size());
-    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 4.0));
+    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 4.0 * texture));
     scene.parts.push_back(part);
     return scene.parts.size() - 1;
   };
@@ -228,7 +304,7 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
   const double tube_yaw = 0.6 + jitter(0.2);
   const int tube_instance = next_instance++;
   const int tube_material = static_cast<int>(scene.materials.size());
-  scene.materials.push_back(RandomMaterial(rng, {0.35, 0.75, 0.35}, 1, 5.0));
+  scene.materials.push_back(RandomMaterial(rng, {0.35, 0.75, 0.35}, 1, 5.0 * texture));
   for (int i = 0; i < kTubeSpheres; ++i) {
     Part part;
     part.shape = ShapeKind::kSphere;
@@ -246,6 +322,24 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale) {
     part.frequency = 1.0;
     part.phase = 0.4;
     scene.parts.push_back(part);
+  }
+
+  // Close to a validation camera: what a view far from the training arc
+  // sees large in front of everything else. Standing on the floor, its
+  // top at the camera's height at most, so that it fills the lower part
+  // of the view rather than all of it.
+  if (layout.near_object_camera != 0) {
+    const Eigen::Vector3d eye = ValidationEye(scene, layout.near_object_camera);
+    Eigen::Vector3d at =
+        eye + (scene.target - eye).normalized() * layout.near_object_distance;
+    const double size = layout.near_object_size;
+    const double height =
+        layout.near_object_is_sphere ? size : std::max(size, 0.5 * at.z());
+    at.z() = height;
+    add(layout.near_object_is_sphere ? ShapeKind::kSphere : ShapeKind::kBox,
+        layout.near_object_is_sphere ? Eigen::Vector3d::Constant(size)
+                                     : Eigen::Vector3d(size, size, height),
+        at, jitter(0.5), {0.5 + jitter(0.3), 0.4 + jitter(0.3), 0.6}, 2);
   }
 
   for (Part& part : scene.parts) {

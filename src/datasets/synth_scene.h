@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
 
 #include "src/core/rigid.h"
 #include "src/datasets/synth_texture.h"
@@ -47,7 +48,45 @@ struct Part {
   double length = 0.0;
 };
 
+// Where the cameras stand (synth_cameras.h) and how the scene's looks
+// scale. The default is the built-in scene's; `pano4d synth --varied` draws
+// one per seed (VariedLayout), so that settings tuned on the default scene
+// are judged on scenes they were not tuned on.
+struct Layout {
+  // The training arc: half its sweep in azimuth around the target, centred
+  // on the -y side (-90 degrees), its height and radius in plan.
+  double training_half_sweep_degrees = 28.0;
+  double training_height = 1.45;
+  double training_radius = 2.9;
+  // Validation cameras 1 and 2: azimuth from the arc's middle, height,
+  // radius in plan.
+  double validation_azimuth_degrees[2] = {75.0, -75.0};
+  double validation_height[2] = {1.15, 1.85};
+  double validation_radius[2] = {2.7, 2.7};
+  // Scales the moving objects (BuildScene's dynamic_scale times this).
+  double dynamic_scale = 1.0;
+  // Multiplies every material's noise frequency (finer or coarser detail).
+  double texture_frequency_scale = 1.0;
+  // A static object on the line from this validation camera (1 or 2) to
+  // the target, `near_object_distance` metres from the camera; 0: none.
+  int near_object_camera = 0;
+  double near_object_distance = 0.0;
+  bool near_object_is_sphere = false;
+  double near_object_size = 0.0;  // sphere radius, or the box's half width
+
+  bool IsDefault() const;
+  nlohmann::json ToJson() const;
+};
+
+// A layout drawn from `seed`: validation cameras 40-85 degrees to either
+// side (or both on one side) at heights 0.6-2.4 m and radii 2.0-3.0 m, a
+// training arc of 30-70 degrees at 1.1-1.9 m, moving objects 0.7-1.5 times
+// their size, textures 0.5-2.5 times their frequency, and in most scenes a
+// static object close to a validation camera.
+Layout VariedLayout(std::uint32_t seed);
+
 struct Scene {
+  Layout layout;
   std::vector<Part> parts;
   std::vector<Material> materials;
   std::vector<Eigen::Vector3d>
@@ -64,8 +103,14 @@ struct Scene {
 // `dynamic_scale` scales the moving objects (size and, for the tube, length)
 // about their footprint on the floor: > 1 makes them cover more of the
 // frame, e.g. to test SfM against large moving objects.
+// `layout` places the cameras and the near object and scales sizes and
+// textures; the default layout gives the built-in scene.
 Scene BuildScene(std::uint32_t seed, bool is_static,
-                 double dynamic_scale = 1.0);
+                 double dynamic_scale = 1.0, const Layout& layout = Layout());
+
+// Where validation camera `index` (1 or 2) stands: the layout's azimuth
+// from the training arc's middle, radius and height, around the target.
+Eigen::Vector3d ValidationEye(const Scene& scene, int index);
 
 // Poses of all parts at normalised time s.
 struct PartPoses {

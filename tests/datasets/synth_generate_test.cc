@@ -123,6 +123,23 @@ TEST(SynthGenerateTest, StaticVariantHasNoDynamicPixels) {
   EXPECT_EQ(ReadJson(dir / "synth.json")["static"], true);
 }
 
+TEST(SynthGenerateTest, VariedSceneRecordsItsLayoutAndIsAnotherScene) {
+  testing::TempDir fixed, varied;
+  GenerateSynthScene({"tiny", 5, false}, fixed.path());
+  SynthOptions options{"tiny", 5, false};
+  options.varied = true;
+  GenerateSynthScene(options, varied.path());
+  const Json j = ReadJson(varied / "synth.json");
+  EXPECT_EQ(j["varied"], true);
+  EXPECT_EQ(j["layout"], VariedLayout(5).ToJson());
+  EXPECT_FALSE(ReadJson(fixed / "synth.json").contains("varied"));
+  EXPECT_FALSE(Files(fixed.path()).at("rgb/1x/1_00000.png") ==
+               Files(varied.path()).at("rgb/1x/1_00000.png"));
+  // The same folder cannot silently hold the other kind of scene.
+  EXPECT_FALSE(EnsureSynthScene(options, varied.path()));
+  EXPECT_THROW(EnsureSynthScene({"tiny", 5, false}, varied.path()), Error);
+}
+
 TEST(SynthGenerateTest, UnknownPresetIsAnError) {
   testing::TempDir dir;
   EXPECT_THROW(GenerateSynthScene({"huge", 0, false}, dir.path()), Error);
