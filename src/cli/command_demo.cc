@@ -35,7 +35,7 @@ void AddDemoCommand(CLI::App& app, Action* action) {
   o->run.workspace = "pano4d_demo";
   o->run.eval = true;
   FitOptions& fit = o->run.fit;
-  fit.trainer.iterations = kDemoIterations;
+  fit.iterations = kDemoIterations;
   fit.expansion.every = kDemoIterations / (kDemoExpansions + 1);
   fit.validate_every = kDemoIterations / kDemoValidations;
   CLI::App* sub = app.add_subcommand(
@@ -59,7 +59,7 @@ void AddDemoCommand(CLI::App& app, Action* action) {
       "WS/pano4d/renders/val` reproduces the metrics.");
   sub->callback([action, o, sub] {
     FitOptions& f = o->run.fit;
-    const int it = f.trainer.iterations;
+    const int it = f.iterations.value_or(kDemoIterations);
     if (sub->count("--expand-every") == 0)
       f.expansion.every = std::max(1, it / (kDemoExpansions + 1));
     if (sub->count("--validate-every") == 0)

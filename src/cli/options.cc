@@ -5,9 +5,6 @@
 namespace pano4d::cli {
 
 void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
-  app->add_option("--iterations", o->iterations, "Training iterations")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
   app->add_option("--max-gaussians", o->max_gaussians,
                   "Densification stops adding Gaussians at this count")
       ->capture_default_str();
@@ -26,6 +23,15 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
   app->add_option("--hidden-thickness", o->hidden_thickness,
                   "Thickness of moving objects, relative to their depth, "
                   "for the hidden-depth term")
+      ->capture_default_str();
+  app->add_flag(
+      "--no-appearance", [o](std::int64_t) { o->appearance = false; },
+      "No per-frame colour transform: the Gaussians' colours explain every "
+      "frame's exposure and white balance as they are");
+  app->add_option("--appearance-weight", o->appearance_weight,
+                  "How strongly each frame's affine colour transform is held "
+                  "near the identity")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--max-static-scale-pixels", o->max_static_scale_pixels,
                   "Largest scale of a static Gaussian, in pixels at the "
@@ -141,6 +147,11 @@ void AddNoExpansionFlag(CLI::App* app, bool* expand) {
 void AddFitOptions(CLI::App* app, FitOptions* o) {
   app->add_option("--seed", o->seed, "Seed of every random choice")
       ->capture_default_str();
+  app->add_option_function<int>(
+         "--iterations", [o](int n) { o->iterations = n; },
+         "Training iterations (default: 100 per training frame, 1000 to "
+         "10000)")
+      ->check(CLI::PositiveNumber);
   AddTrainerOptions(app, &o->trainer);
   app->add_option_function<double>(
          "--depth-weight", [o](double w) { o->depth_weight = w; },
@@ -148,6 +159,12 @@ void AddFitOptions(CLI::App* app, FitOptions* o) {
          "1 on estimated depth: stereo or --depth-dir)")
       ->check(CLI::NonNegativeNumber);
   AddInitOptions(app, &o->init);
+  app->add_option_function<double>(
+         "--voxel-pixels", [o](double v) { o->voxel_pixels = v; },
+         "Voxel of the initial point cloud, in pixels at the median depth "
+         "(default: 2 on depth the dataset gives, 4 on estimated depth, "
+         "whose error would otherwise multiply one surface's points)")
+      ->check(CLI::PositiveNumber);
   AddNoExpansionFlag(app, &o->expand);
   AddExpansionOptions(app, &o->expansion);
   AddExpansionProductOptions(app, o);

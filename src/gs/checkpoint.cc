@@ -38,10 +38,12 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
   arrays.push_back({"logits", &scene_.logits});
   arrays.push_back({"bases.rotations", &scene_.bases.rotations});
   arrays.push_back({"bases.translations", &scene_.bases.translations});
+  arrays.push_back({"appearance", &appearance_});
   nlohmann::json adams = nlohmann::json::object();
   for (auto [name, adam] : {std::pair{"static", &static_adam_},
                             {"dynamic", &dynamic_adam_},
-                            {"basis", &basis_adam_}}) {
+                            {"basis", &basis_adam_},
+                            {"appearance", &appearance_adam_}}) {
     adams[name] = adam->step();
     for (int g = 0; g < adam->groups(); ++g) {
       arrays.push_back(
@@ -262,9 +264,16 @@ void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
   const auto read = [&](const std::string& name, std::vector<float>* dst) {
     file.Read(name, dst);
   };
+  read("appearance", &appearance_);
+  if (appearance_.size() != views_.size() * kAppearanceWidth) {
+    throw Error(source, "appearance", std::to_string(appearance_.size()),
+                "expected " + std::to_string(kAppearanceWidth) +
+                    " values per training view");
+  }
   for (auto [name, adam] : {std::pair{"static", &static_adam_},
                             {"dynamic", &dynamic_adam_},
-                            {"basis", &basis_adam_}}) {
+                            {"basis", &basis_adam_},
+                            {"appearance", &appearance_adam_}}) {
     for (int g = 0; g < adam->groups(); ++g) {
       read(std::string("adam.") + name + "." + adam->name(g) + ".m",
            &adam->first_moment(g));

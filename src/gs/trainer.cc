@@ -23,6 +23,8 @@ namespace {
 // Learning rates of positions decay to this fraction over the run (3DGS:
 // 1.6e-4 -> 1.6e-6).
 constexpr double kFinalLearningRateFraction = 0.01;
+// 3DGS's first densification, once the initial Gaussians have settled.
+constexpr int kDensifyFrom = 500;
 
 using Clock = std::chrono::steady_clock;
 double Since(Clock::time_point start) {
@@ -146,6 +148,7 @@ void TrainerOptions::Check() const {
   non_negative(normal_weight, "normal_weight");
   non_negative(hidden_weight, "hidden_weight");
   non_negative(hidden_thickness, "hidden_thickness");
+  non_negative(appearance_weight, "appearance_weight");
   positive(normal_tolerance, "normal_tolerance");
   if (!(max_anisotropy >= 1)) {
     throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
@@ -158,7 +161,8 @@ void TrainerOptions::Check() const {
                          {lr_sh, "lr_sh"},
                          {lr_logit, "lr_logit"},
                          {lr_basis_rotation, "lr_basis_rotation"},
-                         {lr_basis_translation, "lr_basis_translation"}})
+                         {lr_basis_translation, "lr_basis_translation"},
+                         {lr_appearance, "lr_appearance"}})
     non_negative(v, name);
   positive(densify_every, "densify_every");
   positive(densify_gradient, "densify_gradient");
@@ -181,6 +185,9 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"normal_tolerance", normal_tolerance},
           {"hidden_weight", hidden_weight},
           {"hidden_thickness", hidden_thickness},
+          {"appearance", appearance},
+          {"appearance_weight", appearance_weight},
+          {"lr_appearance", lr_appearance},
           {"lr_mean", lr_mean},
           {"lr_log_scale", lr_log_scale},
           {"lr_quat", lr_quat},
@@ -212,6 +219,10 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
   scene_.Check();
   if (options_.densify_until < 0)
     options_.densify_until = options_.iterations / 2;
+  // A short schedule still densifies over half its window.
+  if (options_.densify_from < 0)
+    options_.densify_from =
+        std::min(kDensifyFrom, std::max(1, options_.densify_until / 2));
   fingerprint_ = options_.ToJson();
   if (views_.empty()) {
     throw Error("fit", "views", "0", "no training views");
@@ -255,6 +266,11 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
         static_cast<float>(std::log(options_.max_static_scale_pixels * depth /
                                     UpperMedian(std::move(focals))));
   }
+  appearance_.clear();
+  for (std::size_t i = 0; i < views_.size(); ++i) {
+    const std::vector<float> identity = IdentityAppearance();
+    appearance_.insert(appearance_.end(), identity.begin(), identity.end());
+  }
   RegisterGroups();
   UpdateLearningRates();
   const std::size_t n = scene_.size();
@@ -275,6 +291,10 @@ void Trainer::RegisterGroups() {
     return means;
   };
   static_mean_group_ = add_model(&static_adam_, &scene_.statics);
+  if (options_.appearance) {
+    appearance_adam_.AddGroup("affine", &appearance_, kAppearanceWidth,
+                              options_.lr_appearance);
+  }
   if (!scene_.has_motion()) return;
   dynamic_mean_group_ = add_model(&dynamic_adam_, &scene_.dynamics);
   dynamic_adam_.AddGroup("logits", &scene_.logits, scene_.bases.num_bases,
@@ -293,6 +313,13 @@ void Trainer::UpdateLearningRates() {
                                    iteration_, options_.iterations);
   };
   static_adam_.SetLearningRate(static_mean_group_, decayed(options_.lr_mean));
+  if (options_.appearance) {
+    appearance_adam_.SetLearningRate(
+        0, ExponentialLearningRate(
+               options_.lr_appearance,
+               options_.lr_appearance * kFinalLearningRateFraction,
+               iteration_, options_.iterations));
+  }
   if (scene_.has_motion()) {
     dynamic_adam_.SetLearningRate(dynamic_mean_group_,
                                   decayed(options_.lr_mean));
@@ -317,10 +344,20 @@ int Trainer::NextView() {
   return order_[order_pos_++];
 }
 
-void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out) {
+void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out,
+                     int appearance_view) {
   const RasterSettings settings = Settings();
   scene_.ComposeAt(time, &composed_);
   rasterizer_.Forward(composed_, camera, settings, out);
+  if (appearance_view < 0) return;
+  if (appearance_view >= static_cast<int>(views_.size())) {
+    throw Error("render", "appearance view", std::to_string(appearance_view),
+                "there are " + std::to_string(views_.size()) +
+                    " training views");
+  }
+  std::vector<float> corrected;
+  ApplyAppearance(appearance(appearance_view), out->rgb, &corrected);
+  out->rgb.swap(corrected);
 }
 
 void Trainer::Backprop(const RasterCamera& camera, int time,
@@ -418,13 +455,35 @@ StepReport Trainer::Step() {
   times_.forward += Since(start);
 
   start = Clock::now();
+  // The loss sees the render in the view's own colours (its appearance
+  // transform), and carries the gradient back through it.
+  const std::size_t view_index = &view - views_.data();
+  const std::vector<float>* rendered = &out_.rgb;
+  if (options_.appearance) {
+    ApplyAppearance(appearance(view_index), out_.rgb, &corrected_);
+    rendered = &corrected_;
+  }
   const PhotometricLoss photo = ComputePhotometricLoss(
-      out_.rgb, view.rgb, w, h, options_.ssim_weight, &d_rgb_);
+      *rendered, view.rgb, w, h, options_.ssim_weight, &d_rgb_);
+  if (options_.appearance) {
+    appearance_grads_.assign(appearance_.size(), 0.0f);
+    float* d_transform = &appearance_grads_[view_index * kAppearanceWidth];
+    ApplyAppearanceBackward(appearance(view_index), out_.rgb, d_rgb_,
+                            &d_corrected_, d_transform);
+    d_rgb_.swap(d_corrected_);
+    report.appearance = AppearanceRegulariser(
+        appearance(view_index), options_.appearance_weight, d_transform);
+    // The reference frame keeps the identity: the Gaussians hold its
+    // colours (a gain shared by every transform and the colours is
+    // otherwise free).
+    if (view_index == kAppearanceReferenceView)
+      std::fill_n(d_transform, kAppearanceWidth, 0.0f);
+  }
   report.l1 = photo.l1;
   report.ssim = photo.ssim;
   double mse = 0;
-  for (std::size_t i = 0; i < out_.rgb.size(); ++i) {
-    const double e = double(out_.rgb[i]) - view.rgb[i];
+  for (std::size_t i = 0; i < rendered->size(); ++i) {
+    const double e = double((*rendered)[i]) - view.rgb[i];
     mse += e * e;
   }
   mse /= static_cast<double>(out_.rgb.size());
@@ -468,7 +527,8 @@ StepReport Trainer::Step() {
             .loss;
   }
   times_.loss += Since(start);
-  report.loss = photo.total + report.depth + report.normal + report.hidden;
+  report.loss = photo.total + report.depth + report.normal + report.hidden +
+                report.appearance;
   if (!std::isfinite(report.loss)) {
     ++skipped_steps_total_;
     ++iteration_;
@@ -560,6 +620,10 @@ StepReport Trainer::Step() {
     report.skipped_rows +=
         basis_adam_.Step({&basis_grads_.rotations, &basis_grads_.translations})
             .skipped_rows;
+  }
+  if (options_.appearance) {
+    report.skipped_rows +=
+        appearance_adam_.Step({&appearance_grads_}).skipped_rows;
   }
   for (float& v : scene_.statics.log_scales)
     v = std::min(v, max_static_log_scale_);

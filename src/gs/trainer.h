@@ -12,6 +12,7 @@
 
 #include "src/core/frames.h"
 #include "src/gs/adam.h"
+#include "src/gs/appearance.h"
 #include "src/gs/scene.h"
 #include "src/render/rasterizer.h"
 
@@ -39,6 +40,10 @@ std::vector<TrainingView> LoadTrainingViews(
 // bake into the geometry. The fit chooses by the frames' depth source
 // (ResolveFitOptions, src/pipeline/fit_options.h).
 inline constexpr double kGivenDepthWeight = 5.0;
+
+// The training view whose colours the Gaussians hold (its appearance
+// transform stays the identity; TrainerOptions::appearance).
+inline constexpr std::size_t kAppearanceReferenceView = 0;
 inline constexpr double kEstimatedDepthWeight = 1.0;
 
 struct TrainerOptions {
@@ -70,6 +75,15 @@ struct TrainerOptions {
   // (docs/experiments/2026-11-22-hidden-depth-term.md).
   double hidden_weight = 1.0;
   double hidden_thickness = 0.1;
+  // Per-frame appearance (appearance.h): an affine colour transform per
+  // training frame applied to its render before the loss, learned at
+  // lr_appearance and held near the identity by appearance_weight x
+  // (|A - I|^2 + |b|^2); the first training frame (the reference) keeps
+  // the identity, so the Gaussians hold its colours. false: the Gaussians'
+  // colours explain every frame as it is.
+  bool appearance = true;
+  double appearance_weight = 0.1;
+  double lr_appearance = 5e-3;  // decayed as the positions' rates
   // Learning rates (3DGS's; positions, basis translations times the scene
   // extent, decayed log-linearly to 1/100 over the run).
   double lr_mean = 1.6e-4;
@@ -84,7 +98,7 @@ struct TrainerOptions {
   // [densify_from, densify_until), Gaussians whose mean screen-space
   // gradient (in NDC units) exceeds the threshold are cloned when small
   // (largest scale <= percent_dense x extent) and split in two when large.
-  int densify_from = 500;
+  int densify_from = -1;   // -1: 500 (3DGS's), or half of densify_until
   int densify_until = -1;  // -1: half the iterations
   int densify_every = 100;
   double densify_gradient = 2e-4;
@@ -131,7 +145,7 @@ struct StepReport {
   std::int64_t iteration = 0;  // after the step
   double loss = 0.0;           // total
   double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0,
-         anisotropy = 0.0, normal = 0.0, hidden = 0.0;
+         anisotropy = 0.0, normal = 0.0, hidden = 0.0, appearance = 0.0;
   double psnr = 0.0;              // of this step's training view
   std::int64_t skipped_rows = 0;  // Gaussians with non-finite gradients
   bool skipped_step = false;      // the loss itself was not finite
@@ -168,8 +182,17 @@ class Trainer {
   bool Done() const { return iteration_ >= options_.iterations; }
   std::int64_t iteration() const { return iteration_; }
 
-  // Renders the scene at `time` (between steps).
-  void Render(const RasterCamera& camera, int time, RenderOutput* out);
+  // Renders the scene at `time` (between steps): its colours as the
+  // Gaussians hold them, or, with `appearance_view` >= 0, as that training
+  // view's camera records them (its appearance transform, when the trainer
+  // learns them).
+  void Render(const RasterCamera& camera, int time, RenderOutput* out,
+              int appearance_view = -1);
+  // Training view i's appearance transform (kAppearanceWidth floats; the
+  // identity when appearance is off).
+  const float* appearance(std::size_t view) const {
+    return &appearance_[view * kAppearanceWidth];
+  }
 
   // The expansion stage's hook: called at every step; a view returned is
   // rendered and its loss added to the step.
@@ -236,7 +259,9 @@ class Trainer {
   // log of options_.max_static_scale_pixels in world units; +inf: none.
   float max_static_log_scale_ = std::numeric_limits<float>::infinity();
 
-  Adam static_adam_, dynamic_adam_, basis_adam_;
+  Adam static_adam_, dynamic_adam_, basis_adam_, appearance_adam_;
+  // Per training view, kAppearanceWidth floats (appearance.h).
+  std::vector<float> appearance_;
   int static_mean_group_ = -1, dynamic_mean_group_ = -1,
       basis_translation_group_ = -1;
   // Densification statistics per Gaussian (static rows, then dynamic).
@@ -260,6 +285,7 @@ class Trainer {
   GaussianGradients direct_grads_;
   ProjectedGradients grads2d_;
   std::vector<float> d_rgb_, d_depth_, d_rgb_extra_;
+  std::vector<float> corrected_, d_corrected_, appearance_grads_;
   GaussianGradients static_grads_, dynamic_grads_;
   std::vector<float> logit_grads_;
   MotionBases basis_grads_;

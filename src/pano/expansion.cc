@@ -315,8 +315,9 @@ void Expansion::Prepare(const Trainer& trainer) {
   frames_seen_.clear();
   for (const TrainingView& v : views) {
     if (v.depth.empty()) continue;
-    frames_seen_.push_back(MakeSeenDepth(
-        v.camera, MatView(v.depth, v.camera.height, v.camera.width)));
+    const cv::Mat depth = MatView(v.depth, v.camera.height, v.camera.width);
+    frames_seen_.push_back(MakeSeenDepth(v.camera, depth));
+    frames_seen_.back().clearance = CameraClearance(depth);
   }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
   if (last_step_ > 0) {

@@ -45,6 +45,19 @@ SeenDepth MakeSeenDepth(const RasterCamera& camera, const cv::Mat& depth,
   return seen;
 }
 
+float CameraClearance(const cv::Mat& depth) {
+  std::vector<float> valid;
+  for (int y = 0; y < depth.rows; ++y) {
+    const float* row = depth.ptr<float>(y);
+    for (int x = 0; x < depth.cols; ++x)
+      if (row[x] > 0 && std::isfinite(row[x])) valid.push_back(row[x]);
+  }
+  if (valid.empty()) return 0.0f;
+  const auto nth = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 50);
+  std::nth_element(valid.begin(), nth, valid.end());
+  return kCameraClearance * *nth;
+}
+
 Sight LookFrom(const SeenDepth& view, const Eigen::Vector3f& point,
                bool* observed) {
   const RasterCamera& c = view.camera;
@@ -81,8 +94,17 @@ std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(count); ++i) {
     const Eigen::Vector3f p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
     const Sight by_frames = Look(frames, p);
-    if (by_frames != Sight::kUnseen) {
+    if (by_frames == Sight::kSeenThrough || by_frames == Sight::kOnSurface) {
       empty[i] = by_frames == Sight::kSeenThrough;
+      continue;
+    }
+    const bool by_a_camera = std::any_of(
+        frames.begin(), frames.end(), [&](const SeenDepth& f) {
+          return f.clearance > 0 &&
+                 (p - f.camera.Center()).norm() < f.clearance;
+        });
+    if (by_a_camera || by_frames == Sight::kUnknown) {
+      empty[i] = by_a_camera;
       continue;
     }
     bool warp_saw_through = false;

@@ -21,7 +21,26 @@ struct SeenDepth {
   // warp of them), 0 where some of it is the prior's guess (M_e). Empty:
   // observed everywhere.
   cv::Mat observed;
+  // A video frame's camera stood in empty space: points nearer to its
+  // centre than this (world units; CameraClearance) are empty, in every
+  // direction, unless a frame sees them on a surface. 0: no such ball.
+  float clearance = 0.0f;
 };
+
+// The ball around a video frame's camera that is taken as empty:
+// kCameraClearance x the nearest depth it saw (its 2nd percentile, robust
+// to a few wrong pixels). Nothing stood nearer to the camera in front of
+// it, and the operator held it there; what lies beside or behind it the
+// frame does not show, so the ball is kept inside the nearest surface.
+// Without it, the expansion fills what no frame saw (behind and below the
+// cameras, where an orbiting view looks back across the scene) at the
+// depth of the farthest warped content around the hole, which can place a
+// sheet of Gaussians in the air beside the cameras' path: invisible to
+// every frame, a fog over a novel view that stands there
+// (docs/experiments/2026-12-02-varied-synthetic-scenes.md). 0 when the
+// depth has no valid pixel.
+float CameraClearance(const cv::Mat& depth);
+constexpr float kCameraClearance = 0.7f;
 
 // Relative depth margin in front of a seen surface that still counts as the
 // surface (depth noise, Gaussians' extent).
@@ -63,6 +82,8 @@ Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point);
 // Which of `count` points (xyz rows) lie in known empty space (parallel;
 // 1 = empty):
 // - seen through by a video frame (`frames`: what the video observed);
+// - else, when no frame has it on its surface: inside a frame's clearance
+//   ball;
 // - else, when no frame saw it (a frame that has it on its surface keeps
 //   it: an expanded view shows one frame's content, none of what other
 //   frames saw; so does a frame without depth there, as stereo leaves

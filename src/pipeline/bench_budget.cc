@@ -67,7 +67,7 @@ BudgetRow Fit(const BudgetOptions& o, const fs::path& dataset, int factor,
     d.factor = factor;
     RunDepth(ws, d);
     FitOptions f;
-    f.trainer.iterations = iterations;
+    f.iterations = iterations;
     f.expansion.every = std::max(1, iterations / kExpansionsPerRun);
     f.expand = o.expand;
     f.validate_every = iterations;  // the final metrics only

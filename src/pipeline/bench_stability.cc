@@ -312,7 +312,7 @@ CaseResult Fit(const std::string& name, const Scene& scene, int iterations,
   inputs.num_times = scene.num_times;
   inputs.depth_source = kDepthFromDataset;
   FitOptions options;
-  options.trainer.iterations = iterations;
+  options.iterations = iterations;
   options.expand = false;
   options.validate_every = options.checkpoint_every = options.log_every =
       iterations;

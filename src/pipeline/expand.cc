@@ -50,7 +50,7 @@ ExpandSummary RunExpand(const Workspace& ws, const ExpandOptions& options) {
   }
   options.fit.expansion.Check();
   const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
-  FitOptions o = ResolveFitOptions(options.fit, frames.depth_source);
+  FitOptions o = ResolveFitOptions(options.fit, FitInputOf(frames));
   o.expansion.gaussian_refinement = true;  // placement is reported
   const std::unique_ptr<Trainer> owned = MakeFitTrainer(
       ReadCheckpointScene(ckpt), LoadTrainingViews(frames.train), o);

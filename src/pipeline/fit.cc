@@ -73,12 +73,14 @@ Image ToImage(const RenderOutput& out) {
   return Image::FromRgb32f(MatView(out.rgb, out.height, out.width, 3));
 }
 
-// Training-view PSNR over every training frame, quantised as the metrics.
+// Training-view PSNR over every training frame (in its own colours),
+// quantised as the metrics.
 double TrainPsnr(Trainer* trainer) {
   double sum = 0;
   RenderOutput out;
-  for (const TrainingView& v : trainer->views()) {
-    trainer->Render(v.camera, v.time, &out);
+  for (std::size_t i = 0; i < trainer->views().size(); ++i) {
+    const TrainingView& v = trainer->views()[i];
+    trainer->Render(v.camera, v.time, &out, static_cast<int>(i));
     const cv::Mat a = QuantizeForMetrics(ToImage(out), v.name);
     const cv::Mat b = QuantizeForMetrics(
         Image::FromRgb32f(MatView(v.rgb, v.camera.height, v.camera.width, 3)),
@@ -164,8 +166,18 @@ void WriteValidation(const Workspace& ws, const FitOptions& o,
                            !expansion->cameras().empty();
   if (val.empty()) return;
   RenderOutput out;
+  if (std::any_of(val.begin(), val.end(), [](const ValidationView& v) {
+        return v.appearance_view >= 0;
+      })) {
+    // Both, as the protocols allow either: the renders scored below take
+    // the same camera's training transform; these keep the Gaussians' own
+    // colours.
+    std::vector<ValidationView> plain = val;
+    for (ValidationView& v : plain) v.appearance_view = -1;
+    summary->val_psnr_without_appearance = Validate(trainer, plain).psnr;
+  }
   for (const ValidationView& v : val) {
-    trainer->Render(v.camera, v.time, &out);
+    trainer->Render(v.camera, v.time, &out, v.appearance_view);
     WriteNpy(ws.val_depth_renders() / (v.name + ".npy"),
              NpyArray::FromFloats({out.height, out.width}, out.depth));
     if (!summary->panorama_only)
@@ -217,6 +229,35 @@ FitInputs LoadFitInputs(const Workspace& ws) {
   return inputs;
 }
 
+int MatchValidationCameras(const std::vector<TrainingView>& train,
+                           std::vector<ValidationView>* val) {
+  // Tolerances for "the same camera": the same rig camera's pose read from
+  // the same file is equal to rounding.
+  constexpr float kSameRotation = 1e-6f;
+  constexpr float kSameCentre = 1e-6f;  // times the scene's size
+  float size = 0;
+  for (const TrainingView& t : train)
+    size = std::max(size, (t.camera.Center() - train[0].camera.Center()).norm());
+  size = std::max(size, 1.0f);
+  int matched = 0;
+  for (ValidationView& v : *val) {
+    v.appearance_view = -1;
+    for (std::size_t i = 0; i < train.size(); ++i) {
+      const RasterCamera& a = train[i].camera;
+      const RasterCamera& b = v.camera;
+      if (a.width == b.width && a.height == b.height && a.fx == b.fx &&
+          a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+          (a.rotation - b.rotation).cwiseAbs().maxCoeff() <= kSameRotation &&
+          (a.Center() - b.Center()).norm() <= kSameCentre * size) {
+        v.appearance_view = static_cast<int>(i);
+        ++matched;
+        break;
+      }
+    }
+  }
+  return matched;
+}
+
 QuickMetrics Validate(Trainer* trainer,
                       const std::vector<ValidationView>& val) {
   QuickMetrics q;
@@ -224,7 +265,7 @@ QuickMetrics Validate(Trainer* trainer,
   int counts[3] = {0, 0, 0};
   RenderOutput out;
   for (const ValidationView& v : val) {
-    trainer->Render(v.camera, v.time, &out);
+    trainer->Render(v.camera, v.time, &out, v.appearance_view);
     const cv::Mat a = QuantizeForMetrics(ToImage(out), v.name);
     const cv::Mat b = QuantizeForMetrics(v.rgb, v.name);
     std::optional<double> values[3] = {Psnr(a, b), std::nullopt, std::nullopt};
@@ -277,7 +318,8 @@ std::optional<std::string> CheckpointMismatch(const Workspace& ws,
 FitSummary FitController::Run() {
   given_.Check();
   const Workspace& ws = workspace_;
-  const FitOptions o = ResolveFitOptions(given_, inputs_.depth_source);
+  const FitOptions o = ResolveFitOptions(
+      given_, {inputs_.depth_source, static_cast<int>(inputs_.train.size())});
   FitSummary summary;
   summary.given = given_;
   summary.used = o;
@@ -315,6 +357,15 @@ FitSummary FitController::Run() {
     PANO4D_LOG(kInfo) << summary.init.Brief();
   }
   summary.seconds.init = init_timer.WallSeconds();
+  if (o.trainer.appearance) {
+    const int matched = MatchValidationCameras(inputs_.train, &inputs_.val);
+    summary.validation_appearance =
+        matched == 0 ? "none (no validation camera is a training camera)"
+                     : "the same camera's training frame (" +
+                           std::to_string(matched) + " of " +
+                           std::to_string(inputs_.val.size()) +
+                           " validation frames)";
+  }
   const std::unique_ptr<Trainer> owned =
       MakeFitTrainer(std::move(scene), std::move(inputs_.train), o);
   Trainer& trainer = *owned;

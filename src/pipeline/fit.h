@@ -31,7 +31,17 @@ struct ValidationView {
   RasterCamera camera;
   Image rgb;
   cv::Mat covisible;  // empty: none
+  // The training view taken by the same camera (Nvidia's view 0 trains at
+  // t = 0): renders take its appearance transform, the colours that camera
+  // records. -1: none, the Gaussians' own colours.
+  int appearance_view = -1;
 };
+
+// Sets each validation view's appearance_view: the first training view
+// whose camera has the same intrinsics and pose (centre within 1e-6 of the
+// scene's size, rotation within 1e-6), else -1. Returns how many match.
+int MatchValidationCameras(const std::vector<TrainingView>& train,
+                           std::vector<ValidationView>* val);
 
 // What a fit works on.
 struct FitInputs {

@@ -1,5 +1,7 @@
 #include "src/pipeline/fit_options.h"
 
+#include <algorithm>
+
 #include "src/core/error.h"
 #include "src/core/frames.h"
 
@@ -19,6 +21,14 @@ void FitOptions::Check() const {
     throw Error("--checkpoint-every/--validate-every/--log-every", "", "",
                 "must be at least 1");
   }
+  if (iterations && *iterations < 1) {
+    throw Error("--iterations", "", std::to_string(*iterations),
+                "must be at least 1");
+  }
+  if (voxel_pixels && !(*voxel_pixels > 0)) {
+    throw Error("--voxel-pixels", "", std::to_string(*voxel_pixels),
+                "must be positive");
+  }
   if (depth_weight && !(*depth_weight >= 0)) {
     throw Error("--depth-weight", "", std::to_string(*depth_weight),
                 "must be zero or positive");
@@ -34,23 +44,29 @@ void FitOptions::Check() const {
 
 nlohmann::json FitOptions::ToJson() const {
   // The input-dependent defaults appear as given: null until resolved.
+  const auto optional = [](const auto& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json();
+  };
   nlohmann::json trainer_json = trainer.ToJson();
-  trainer_json["depth_weight"] =
-      depth_weight ? nlohmann::json(*depth_weight) : nlohmann::json();
+  trainer_json["iterations"] = optional(iterations);
+  trainer_json["depth_weight"] = optional(depth_weight);
+  nlohmann::json init_json = init.ToJson();
+  init_json["voxel_pixels"] = optional(voxel_pixels);
   nlohmann::json expansion_json = expansion.ToJson();
   expansion_json["warp_depth"] =
       warp_depth ? nlohmann::json(WarpDepthName(*warp_depth))
                  : nlohmann::json();
   return {{"seed", seed},
           {"trainer", trainer_json},
-          {"init", init.ToJson()},
+          {"init", init_json},
           {"expand", expand},
           {"expansion", expansion_json},
           {"prior_cmd", prior_cmd},
           {"panorama_width", panorama_width},
-          {"depth_weight",
-           depth_weight ? nlohmann::json(*depth_weight) : nlohmann::json()},
+          {"iterations", optional(iterations)},
+          {"depth_weight", optional(depth_weight)},
           {"warp_depth", expansion_json["warp_depth"]},
+          {"voxel_pixels", optional(voxel_pixels)},
           {"resume", resume},
           {"deterministic", deterministic},
           {"checkpoint_every", checkpoint_every},
@@ -59,8 +75,23 @@ nlohmann::json FitOptions::ToJson() const {
           {"time_budget", time_budget}};
 }
 
-FitOptions ResolveFitOptions(FitOptions o, const std::string& depth_source) {
-  const bool dataset_depth = depth_source == kDepthFromDataset;
+FitInput FitInputOf(const WorkspaceFrames& frames) {
+  return {frames.depth_source, static_cast<int>(frames.train.size())};
+}
+
+int ScheduleIterations(int train_frames) {
+  return std::clamp(kEpochs * train_frames, kMinIterations, kMaxIterations);
+}
+
+FitOptions ResolveFitOptions(FitOptions o, const FitInput& input) {
+  const bool dataset_depth = input.depth_source == kDepthFromDataset;
+  if (!o.iterations) o.iterations = ScheduleIterations(input.train_frames);
+  if (!o.voxel_pixels) {
+    o.voxel_pixels =
+        dataset_depth ? kGivenDepthVoxelPixels : kEstimatedDepthVoxelPixels;
+  }
+  o.trainer.iterations = *o.iterations;
+  o.init.voxel_pixels = *o.voxel_pixels;
   if (!o.depth_weight)
     o.depth_weight = dataset_depth ? kGivenDepthWeight : kEstimatedDepthWeight;
   if (!o.warp_depth)
@@ -76,9 +107,11 @@ nlohmann::json ResumeFingerprint(const FitOptions& used) {
        {"resume", "deterministic", "checkpoint_every", "validate_every",
         "log_every", "time_budget", "panorama_width"})
     j.erase(conduct);
-  // Held in trainer and expansion as used.
+  // Held in trainer, init and expansion as used.
+  j.erase("iterations");
   j.erase("depth_weight");
   j.erase("warp_depth");
+  j.erase("voxel_pixels");
   if (!used.expand) {
     j.erase("expansion");
     j.erase("prior_cmd");

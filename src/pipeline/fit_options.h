@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "src/core/frames.h"
 #include "src/gs/init.h"
 #include "src/gs/trainer.h"
 #include "src/pano/expansion.h"
@@ -37,9 +38,11 @@ struct FitOptions {
   int panorama_width = 1024;
 
   // Defaults that depend on the input: unset, ResolveFitOptions chooses by
-  // where the frames' depth came from.
+  // where the frames' depth came from and how many frames there are.
+  std::optional<int> iterations;  // the schedule's length
   std::optional<double> depth_weight;
   std::optional<WarpDepth> warp_depth;
+  std::optional<double> voxel_pixels;  // the initialisation's voxel
 
   // How the run goes; none of these changes what it computes.
   bool resume = false;  // from WS/pano4d/checkpoints/fit.ckpt when there
@@ -57,18 +60,46 @@ struct FitOptions {
   nlohmann::json ToJson() const;
 };
 
-// The options a fit of frames whose depth came from `depth_source` (a
-// kDepthFrom* of src/core/frames.h) runs with: depth_weight and warp_depth
-// set, and copied into trainer.depth_weight and expansion.warp_depth.
+// What the input-dependent defaults depend on.
+struct FitInput {
+  std::string depth_source;  // a kDepthFrom* of src/core/frames.h
+  int train_frames = 0;
+};
+FitInput FitInputOf(const WorkspaceFrames& frames);
+
+// The schedule's length when --iterations is not given: kEpochs visits of
+// every training frame, at least kMinIterations and at most kMaxIterations.
+// Where the error-against-run-time curve flattens: Balloon1 (12 frames)
+// about 1000-1250 iterations, the small synthetic scene (48 frames) about
+// 3000-5000 (docs/experiments/2026-12-02-budget-and-schedule.md).
+inline constexpr int kEpochs = 100;
+inline constexpr int kMinIterations = 1000;
+inline constexpr int kMaxIterations = 10000;
+int ScheduleIterations(int train_frames);
+
+// The initialisation's voxel, in pixels at the median depth: 2 on depth
+// the dataset gives; 4 on estimated depth, whose error (stereo: 0.5-0.8%
+// of the depth on Balloon1, about 2-4 pixels at its focal length) puts
+// the points of one surface from different frames into different 2-pixel
+// voxels, so that the count grows with the frames instead of the surface.
+inline constexpr double kGivenDepthVoxelPixels = 2.0;
+inline constexpr double kEstimatedDepthVoxelPixels = 4.0;
+
+// The options a fit of `input` runs with: iterations, depth_weight,
+// warp_depth and voxel_pixels set, and copied into trainer.iterations,
+// trainer.depth_weight, expansion.warp_depth and init.voxel_pixels.
+//   iterations: ScheduleIterations;
 //   depth weight: kGivenDepthWeight on depth the dataset gives,
 //     kEstimatedDepthWeight on depth pano4d estimated (or of unknown
 //     source);
 //   warp depth: the frames' own depth where the dataset gives it, rendered
 //     depth on estimated depth (stereo has holes and errors at the edges a
-//     warp needs most; not measured there).
-// Measured in docs/experiments/2026-11-23-depth-weight-5-on-dataset-depth.md
-// and 2026-11-24-warp-given-depth-and-refine-outside-3.md.
-FitOptions ResolveFitOptions(FitOptions given, const std::string& depth_source);
+//     warp needs most; not measured there);
+//   voxel: kGivenDepthVoxelPixels or kEstimatedDepthVoxelPixels.
+// Measured in docs/experiments/2026-11-23-depth-weight-5-on-dataset-depth.md,
+// 2026-11-24-warp-given-depth-and-refine-outside-3.md and
+// 2026-12-02-budget-and-schedule.md.
+FitOptions ResolveFitOptions(FitOptions given, const FitInput& input);
 
 // What a resumed fit must share with the run that wrote its checkpoint:
 // every option of `used` (ResolveFitOptions' result) that changes the

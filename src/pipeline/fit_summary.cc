@@ -88,6 +88,14 @@ std::string FitSummary::FullReport() const {
       "last loss", l.loss, l.l1, l.ssim, l.depth, l.normal, l.hidden);
   s += StringPrintf("  %-22s %.3f dB over %zu training frames\n", "train PSNR",
                     train_psnr, train_frames);
+  if (!validation_appearance.empty()) {
+    s += StringPrintf("  %-22s validation renders take %s", "appearance",
+                      validation_appearance.c_str());
+    if (val_psnr_without_appearance)
+      s += StringPrintf("; PSNR %.3f without it",
+                        *val_psnr_without_appearance);
+    s += "\n";
+  }
   if (evaluation) {
     const EvaluationResult& e = *evaluation;
     s += StringPrintf(
@@ -146,6 +154,14 @@ nlohmann::json FitSummary::ToJson() const {
                         : nlohmann::json()},
       {"final_loss", last_step.loss},
       {"train_psnr", train_psnr},
+      {"appearance",
+       validation_appearance.empty()
+           ? nlohmann::json()
+           : nlohmann::json{{"validation", validation_appearance},
+                            {"val_psnr_without",
+                             val_psnr_without_appearance
+                                 ? nlohmann::json(*val_psnr_without_appearance)
+                                 : nlohmann::json()}}},
       {"options", trainer_options.ToJson()},
       {"options_given", given.ToJson()},
       {"options_used", used.ToJson()},

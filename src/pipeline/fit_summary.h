@@ -61,6 +61,11 @@ struct FitSummary {
   std::size_t refinement_views = 0;
   // --no-gaussian-refinement: validation scored the panorama results.
   bool panorama_only = false;
+  // Which appearance transform the validation renders took (empty: the
+  // trainer learns none), and, when some took a training frame's, the
+  // validation PSNR of the Gaussians' own colours.
+  std::string validation_appearance;
+  std::optional<double> val_psnr_without_appearance;
 
   // The trainer's options as it ran them (densify_until resolved).
   TrainerOptions trainer_options;

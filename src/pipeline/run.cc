@@ -292,9 +292,9 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     FitOptions f = o.fit;
     if (!plan.Runs("motion")) f.init.num_bases = 0;
     if (!plan.Runs("expansion")) f.expand = false;
-    const std::optional<std::string> mismatch =
-        CheckpointMismatch(ws, ResolveFitOptions(f, frames.depth_source));
-    if (!mismatch && FitComplete(ws, f.trainer.iterations))
+    const FitOptions used = ResolveFitOptions(f, FitInputOf(frames));
+    const std::optional<std::string> mismatch = CheckpointMismatch(ws, used);
+    if (!mismatch && FitComplete(ws, used.trainer.iterations))
       return std::string("complete from an earlier run");
     if (mismatch && fs::exists(ws.checkpoint())) {
       PANO4D_LOG(kInfo) << "run: fit: the workspace's fit had other options ("

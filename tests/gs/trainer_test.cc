@@ -134,6 +134,47 @@ TEST(TrainerTest, MotionBasesLearnAKnownTranslation) {
   }
 }
 
+TEST(TrainerTest, AppearanceExplainsAViewsExposureInsteadOfTheGaussians) {
+  // Three views of a static scene; the middle one was exposed 30% darker
+  // with a blue cast. With appearance the transforms take the difference:
+  // the Gaussians render the other views' colours, and the darker view's
+  // transform holds the gain. Without, the Gaussians average it in.
+  const GaussianScene teacher = StaticTeacher();
+  auto views = RenderViews(teacher, {-0.1f, 0.0f, 0.1f}, {0, 0, 0});
+  for (std::size_t p = 0; p < views[1].rgb.size(); p += 3) {
+    views[1].rgb[p] *= 0.7f;
+    views[1].rgb[p + 1] *= 0.7f;
+    views[1].rgb[p + 2] = 0.7f * views[1].rgb[p + 2] + 0.05f;
+  }
+  // The mean signed error of view 0's render (the reference frame's
+  // colours): the Gaussians' colour bias.
+  const auto bias_on_view0 = [&](bool appearance) {
+    TrainerOptions options = FastOptions(450);
+    options.appearance = appearance;
+    Trainer trainer(Perturbed(teacher, 4), views, options, /*seed=*/0);
+    while (!trainer.Done()) trainer.Step();
+    RenderOutput out;
+    trainer.Render(views[0].camera, 0, &out);
+    double sum = 0;
+    for (std::size_t i = 0; i < out.rgb.size(); ++i)
+      sum += out.rgb[i] - views[0].rgb[i];
+    if (appearance) {
+      const float* dark = trainer.appearance(1);
+      EXPECT_LT(dark[0], 0.9f);  // red gain of the dark view
+      EXPECT_LT(dark[4], 0.9f);  // green gain
+      EXPECT_GT(dark[8] + dark[11], dark[4]) << "no blue cast";
+      const float* reference = trainer.appearance(0);
+      EXPECT_EQ(std::vector<float>(reference, reference + kAppearanceWidth),
+                IdentityAppearance());
+    }
+    return sum / out.rgb.size();
+  };
+  const double with = bias_on_view0(true), without = bias_on_view0(false);
+  EXPECT_LT(without, -0.005);  // darkened by the average
+  EXPECT_LT(std::abs(with), 0.5 * std::abs(without))
+      << "with " << with << " without " << without;
+}
+
 TEST(TrainerTest, NonFiniteGradientIsSkippedLoggedAndTrainingGoesOn) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});

@@ -152,6 +152,40 @@ TEST(FreeSpaceTest, GuessedDepthClearsAPointByAMajority) {
   EXPECT_EQ(InFreeSpace({}, expanded, p.data(), 1)[0], 0);
 }
 
+TEST(FreeSpaceTest, TheSpaceAroundAVideoCameraIsEmptyUnlessAFrameSawASurface) {
+  // The nearest thing the frame saw is 2.0 away (a few wrong pixels at 0.5
+  // do not shrink the ball: it is taken at the 2nd percentile).
+  cv::Mat depth(kHeight, kWidth, CV_32FC1, 4.0f);
+  depth(cv::Rect(0, 20, kWidth, 10)) = 2.0f;
+  depth.at<float>(0, 0) = 0.5f;
+  EXPECT_FLOAT_EQ(CameraClearance(depth), kCameraClearance * 2.0f);
+  EXPECT_EQ(CameraClearance(cv::Mat(kHeight, kWidth, CV_32FC1, 0.0f)), 0.0f);
+  SeenDepth frame = MakeSeenDepth(Camera(), depth);
+  frame.clearance = CameraClearance(depth);
+  // Beside and behind the camera, outside its image: no frame saw there.
+  const std::vector<Eigen::Vector3f> points = {
+      {1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -1.0f}, {0.0f, 1.2f, 0.3f},
+      {3.0f, 0.0f, 0.0f}};  // the last is outside the ball
+  std::vector<float> xyz;
+  for (const Eigen::Vector3f& p : points)
+    xyz.insert(xyz.end(), p.data(), p.data() + 3);
+  std::vector<std::uint8_t> empty =
+      InFreeSpace({frame}, {}, xyz.data(), points.size());
+  EXPECT_EQ(empty, (std::vector<std::uint8_t>{1, 1, 1, 0}));
+  // A second frame beside the first that has the first point on its
+  // surface keeps it: what a frame observed wins over the ball.
+  RasterCamera side = Camera();
+  side.translation = Eigen::Vector3f(-1.0f, 0.0f, 1.0f);  // centre (1, 0, -1)
+  const SeenDepth other =
+      MakeSeenDepth(side, cv::Mat(kHeight, kWidth, CV_32FC1, 1.0f));
+  empty = InFreeSpace({frame, other}, {}, xyz.data(), 1);
+  EXPECT_EQ(empty[0], 0);
+  // Without the ball nothing is claimed there.
+  frame.clearance = 0;
+  empty = InFreeSpace({frame}, {}, xyz.data(), points.size());
+  EXPECT_EQ(empty, (std::vector<std::uint8_t>{0, 0, 0, 0}));
+}
+
 TEST(FreeSpaceTest, DepthOfAnotherSizeOrTypeIsAnError) {
   EXPECT_THROW(
       MakeSeenDepth(Camera(), cv::Mat(kHeight, kWidth + 1, CV_32FC1, 1.0f)),

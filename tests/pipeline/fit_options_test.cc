@@ -14,11 +14,11 @@ namespace {
 // estimated. A value given is used as it is.
 TEST(FitOptionsTest, InputDependentDefaultsFollowTheDepthSource) {
   const FitOptions given;
-  const FitOptions dataset = ResolveFitOptions(given, kDepthFromDataset);
+  const FitOptions dataset = ResolveFitOptions(given, {kDepthFromDataset});
   EXPECT_EQ(dataset.trainer.depth_weight, kGivenDepthWeight);
   EXPECT_EQ(dataset.expansion.warp_depth, WarpDepth::kGiven);
   for (const char* estimated : {kDepthFromStereo, kDepthFromExternal, ""}) {
-    const FitOptions used = ResolveFitOptions(given, estimated);
+    const FitOptions used = ResolveFitOptions(given, {estimated});
     EXPECT_EQ(used.trainer.depth_weight, kEstimatedDepthWeight) << estimated;
     EXPECT_EQ(used.expansion.warp_depth, WarpDepth::kRendered) << estimated;
   }
@@ -26,7 +26,7 @@ TEST(FitOptionsTest, InputDependentDefaultsFollowTheDepthSource) {
   FitOptions set;
   set.depth_weight = 2.5;
   set.warp_depth = WarpDepth::kRendered;
-  const FitOptions used = ResolveFitOptions(set, kDepthFromDataset);
+  const FitOptions used = ResolveFitOptions(set, {kDepthFromDataset});
   EXPECT_EQ(used.trainer.depth_weight, 2.5);
   EXPECT_EQ(used.expansion.warp_depth, WarpDepth::kRendered);
   // Given and used, as fit.json records them.
@@ -36,23 +36,58 @@ TEST(FitOptionsTest, InputDependentDefaultsFollowTheDepthSource) {
   EXPECT_EQ(dataset.ToJson().at("warp_depth"), "given");
 }
 
+// The schedule and the initial voxel follow the input: 100 visits of every
+// frame within [1000, 10000]; a 4-pixel voxel on estimated depth, whose
+// error would scatter one surface over many 2-pixel voxels. Given values
+// stay.
+TEST(FitOptionsTest, ScheduleAndVoxelFollowTheInput) {
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromStereo, 12}).trainer.iterations,
+            1200);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 48}).trainer.iterations,
+            4800);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 3}).trainer.iterations,
+            kMinIterations);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 500}).trainer.iterations,
+            kMaxIterations);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 12}).init.voxel_pixels,
+            kGivenDepthVoxelPixels);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromStereo, 12}).init.voxel_pixels,
+            kEstimatedDepthVoxelPixels);
+  FitOptions given;
+  given.iterations = 77;
+  given.voxel_pixels = 3;
+  const FitOptions used = ResolveFitOptions(given, {kDepthFromStereo, 12});
+  EXPECT_EQ(used.trainer.iterations, 77);
+  EXPECT_EQ(used.init.voxel_pixels, 3);
+  EXPECT_TRUE(FitOptions{}.ToJson().at("iterations").is_null());
+  EXPECT_EQ(used.ToJson().at("iterations"), 77);
+  EXPECT_THROW(
+      [] {
+        FitOptions bad;
+        bad.iterations = 0;
+        bad.Check();
+      }(),
+      Error);
+}
+
 // Every option of every struct is in the JSON, once.
 TEST(FitOptionsTest, ToJsonHoldsEveryStruct) {
   const nlohmann::json j = FitOptions{}.ToJson();
   for (const char* key :
        {"seed", "trainer", "init", "expand", "expansion", "prior_cmd",
-        "panorama_width", "depth_weight", "warp_depth", "resume",
+        "panorama_width", "iterations", "depth_weight", "warp_depth",
+        "voxel_pixels", "resume",
         "deterministic", "checkpoint_every", "validate_every", "log_every",
         "time_budget"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["init"].at("num_bases"), InitOptions{}.num_bases);
-  EXPECT_EQ(j["trainer"].at("iterations"), TrainerOptions{}.iterations);
+  EXPECT_TRUE(j["trainer"].at("iterations").is_null());  // from the input
   EXPECT_EQ(j["expansion"].at("every"), ExpansionOptions{}.every);
 }
 
 // What changes the result is in the fingerprint; how the run goes is not.
 TEST(FitOptionsTest, ResumeFingerprintLeavesTheConductOut) {
-  const FitOptions a = ResolveFitOptions(FitOptions{}, kDepthFromDataset);
+  const FitOptions a = ResolveFitOptions(FitOptions{}, {kDepthFromDataset});
   FitOptions conduct = a;
   conduct.resume = true;
   conduct.checkpoint_every = 7;

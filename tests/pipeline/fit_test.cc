@@ -39,7 +39,7 @@ class FitControllerTest : public ::testing::Test {
 
   static FitOptions Short(int iterations) {
     FitOptions o;
-    o.trainer.iterations = iterations;
+    o.iterations = iterations;
     o.expand = false;
     o.validate_every = o.checkpoint_every = iterations;
     return o;
@@ -105,7 +105,7 @@ TEST_F(FitControllerTest, StopCheckpointsAndTheRunResumes) {
 TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
   const Workspace ws = Listed("ws_resume");
   RunFit(ws, Short(10));
-  const FitOptions used = ResolveFitOptions(Short(10), kDepthFromDataset);
+  const FitOptions used = ResolveFitOptions(Short(10), {kDepthFromDataset});
   EXPECT_FALSE(CheckpointMismatch(ws, used));
   FitOptions other = Short(10);
   other.resume = true;
@@ -118,7 +118,7 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
     EXPECT_EQ(e.value(), "20") << e.what();
   }
   const std::optional<std::string> why =
-      CheckpointMismatch(ws, ResolveFitOptions(other, kDepthFromDataset));
+      CheckpointMismatch(ws, ResolveFitOptions(other, {kDepthFromDataset}));
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("init.num_bases"), std::string::npos) << *why;
   FitOptions seed = Short(10);

@@ -1,0 +1,51 @@
+#include "src/gs/appearance.h"
+
+#include <cstddef>
+
+namespace pano4d {
+
+std::vector<float> IdentityAppearance() {
+  return {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+}
+
+void ApplyAppearance(const float* a, const std::vector<float>& rgb,
+                     std::vector<float>* out) {
+  out->resize(rgb.size());
+  const float* b = a + 9;
+  for (std::size_t p = 0; p + 2 < rgb.size(); p += 3) {
+    const float r = rgb[p], g = rgb[p + 1], bl = rgb[p + 2];
+    for (int c = 0; c < 3; ++c)
+      (*out)[p + c] = a[c * 3] * r + a[c * 3 + 1] * g + a[c * 3 + 2] * bl + b[c];
+  }
+}
+
+void ApplyAppearanceBackward(const float* a, const std::vector<float>& rgb,
+                             const std::vector<float>& d_out,
+                             std::vector<float>* d_rgb, float* d_transform) {
+  d_rgb->resize(rgb.size());
+  double sums[12] = {0};
+  for (std::size_t p = 0; p + 2 < rgb.size(); p += 3) {
+    const float* g = &d_out[p];
+    for (int j = 0; j < 3; ++j)
+      (*d_rgb)[p + j] = a[j] * g[0] + a[3 + j] * g[1] + a[6 + j] * g[2];
+    for (int c = 0; c < 3; ++c) {
+      for (int j = 0; j < 3; ++j) sums[c * 3 + j] += double(g[c]) * rgb[p + j];
+      sums[9 + c] += g[c];
+    }
+  }
+  for (int k = 0; k < 12; ++k) d_transform[k] += static_cast<float>(sums[k]);
+}
+
+double AppearanceRegulariser(const float* a, double weight,
+                             float* d_transform) {
+  const std::vector<float> identity = IdentityAppearance();
+  double sum = 0;
+  for (int k = 0; k < kAppearanceWidth; ++k) {
+    const double e = double(a[k]) - identity[k];
+    sum += e * e;
+    d_transform[k] += static_cast<float>(2.0 * weight * e);
+  }
+  return weight * sum;
+}
+
+}  // namespace pano4d
