@@ -149,7 +149,7 @@ void AddFitOptions(CLI::App* app, FitOptions* o) {
       ->capture_default_str();
   app->add_option_function<int>(
          "--iterations", [o](int n) { o->iterations = n; },
-         "Training iterations (default: 100 per training frame, 1000 to "
+         "Training iterations (default: 100 per training frame, 2000 to "
          "10000)")
       ->check(CLI::PositiveNumber);
   AddTrainerOptions(app, &o->trainer);

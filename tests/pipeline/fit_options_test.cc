@@ -37,12 +37,12 @@ TEST(FitOptionsTest, InputDependentDefaultsFollowTheDepthSource) {
 }
 
 // The schedule and the initial voxel follow the input: 100 visits of every
-// frame within [1000, 10000]; a 4-pixel voxel on estimated depth, whose
+// frame within [2000, 10000]; a 4-pixel voxel on estimated depth, whose
 // error would scatter one surface over many 2-pixel voxels. Given values
 // stay.
 TEST(FitOptionsTest, ScheduleAndVoxelFollowTheInput) {
-  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromStereo, 12}).trainer.iterations,
-            1200);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromStereo, 30}).trainer.iterations,
+            3000);
   EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 48}).trainer.iterations,
             4800);
   EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 3}).trainer.iterations,
