@@ -80,6 +80,10 @@ class Projector {
     translation_ = target.translation.cast<double>() -
                    rotation_ * source.translation.cast<double>();
   }
+  double FocalAreaRatio() const {
+    return static_cast<double>(target_.fx) * target_.fy /
+           (static_cast<double>(source_.fx) * source_.fy);
+  }
   // The point at continuous source pixel position (x, y) and z-depth z.
   Landing Land(double x, double y, double z) const {
     const Eigen::Vector3d p_src((x - source_.cx) / source_.fx * z,
@@ -104,18 +108,36 @@ class Projector {
 // log-depth (NaN without depth) and the landing of the pixel's centre.
 struct Vertices {
   int width = 0, height = 0;
-  std::vector<float> log_z;
+  std::vector<float> z, log_z;  // source z-depth; 0 and NaN without
   std::vector<Landing> landing;
+  // Target pixels per source pixel, in area, of a patch facing both cameras
+  // at the same distance from each: the focal lengths' ratio squared.
+  double focal_area_ratio = 1;
   bool Has(int p) const { return !std::isnan(log_z[p]); }
 };
+
+// How much larger triangle (a, b, c) is in the target than a patch at the
+// same distances that faces both cameras: 1 for a surface the target sees
+// at the angle the source does (however much closer), about
+// cos(target angle) / cos(source angle) for one it sees more frontally.
+double Stretch(const Vertices& m, int a, int b, int c) {
+  const Landing &la = m.landing[a], &lb = m.landing[b], &lc = m.landing[c];
+  const double area = 0.5 * std::abs((lb.u - la.u) * (lc.v - la.v) -
+                                     (lb.v - la.v) * (lc.u - la.u));
+  const double closer = (m.z[a] / la.z + m.z[b] / lb.z + m.z[c] / lc.z) / 3;
+  // A triangle covers half a source pixel.
+  return area / (0.5 * m.focal_area_ratio * closer * closer);
+}
 
 Vertices LiftVertices(const cv::Mat& depth, const cv::Mat& valid,
                       const Projector& projector) {
   Vertices m;
   m.width = depth.cols;
   m.height = depth.rows;
+  m.z.assign(depth.total(), 0.0f);
   m.log_z.assign(depth.total(), std::numeric_limits<float>::quiet_NaN());
   m.landing.assign(depth.total(), Landing());
+  m.focal_area_ratio = projector.FocalAreaRatio();
   for (int y = 0; y < m.height; ++y) {
     const float* d = depth.ptr<float>(y);
     const std::uint8_t* ok = valid.empty() ? nullptr : valid.ptr<uint8_t>(y);
@@ -123,6 +145,7 @@ Vertices LiftVertices(const cv::Mat& depth, const cv::Mat& valid,
       const float z = d[x];
       if (!(z > 0) || !std::isfinite(z) || (ok && !ok[x])) continue;
       const int i = y * m.width + x;
+      m.z[i] = z;
       m.log_z[i] = std::log(z);
       m.landing[i] = projector.Land(x + 0.5, y + 0.5, z);
     }
@@ -255,23 +278,30 @@ void RasteriseTriangle(const Landing& a, const Landing& b, const Landing& c,
   }
 }
 
-// Draws the kept triangles of every 2x2 block into `canvas`; returns, per
-// vertex, whether it lies on the mesh's rim: a block around it lost a
-// triangle (a break or a corner without depth), or it is on the image's
-// border.
-std::vector<std::uint8_t> DrawMesh(const Vertices& m, const Breaks& breaks,
-                                   const cv::Vec3f* colour, Canvas* canvas) {
+// The mesh: two triangle slots per 2x2 block (indexed by its top-left
+// pixel), and per vertex whether it lies on the mesh's rim.
+struct Triangle {
+  int a = -1, b = -1, c = -1;  // vertex indices; a < 0: no triangle
+  double stretch = 0;          // Stretch(); NaN where a vertex does not land
+};
+struct Mesh {
+  std::vector<std::array<Triangle, 2>> blocks;
+  std::vector<std::uint8_t> rim;
+};
+
+// Two triangles per block, those with an edge across a break left out. A
+// vertex is on the rim when a block around it lost a triangle (a break or a
+// corner without depth), or on the image's border.
+Mesh BuildMesh(const Vertices& m, const Breaks& breaks) {
   const int w = m.width, h = m.height;
-  std::vector<std::uint8_t> rim(m.log_z.size(), 0);
+  Mesh mesh;
+  mesh.blocks.assign(m.log_z.size(), {});
+  mesh.rim.assign(m.log_z.size(), 0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      if (x == 0 || y == 0 || x == w - 1 || y == h - 1) rim[y * w + x] = 1;
+      if (x == 0 || y == 0 || x == w - 1 || y == h - 1) mesh.rim[y * w + x] = 1;
   const auto broken = [&](int dir, int x, int y) {
     return breaks.broken[dir][y * w + x] != 0;
-  };
-  const auto draw = [&](int a, int b, int c) {
-    RasteriseTriangle(m.landing[a], m.landing[b], m.landing[c], colour[a],
-                      colour[b], colour[c], Layer::kMesh, canvas);
   };
   for (int y = 0; y + 1 < h; ++y) {
     for (int x = 0; x + 1 < w; ++x) {
@@ -288,35 +318,75 @@ std::vector<std::uint8_t> DrawMesh(const Vertices& m, const Breaks& breaks,
       const bool top = !broken(kRight, x, y),
                  bottom = !broken(kRight, x, y + 1);
       const bool left = !broken(kDown, x, y), right = !broken(kDown, x + 1, y);
+      std::array<Triangle, 2>& slots = mesh.blocks[p00];
       int kept = 0;
+      const auto keep = [&](int a, int b, int c) {
+        const bool lands = m.landing[a].Lands() && m.landing[b].Lands() &&
+                           m.landing[c].Lands();
+        slots[kept++] = {a, b, c,
+                         lands ? Stretch(m, a, b, c)
+                               : std::numeric_limits<double>::quiet_NaN()};
+      };
       if (diagonal) {
         const bool d = !broken(kDiagonal, x, y);
-        if (h00 && h10 && h11 && top && right && d) draw(p00, p10, p11), ++kept;
-        if (h00 && h11 && h01 && d && bottom && left)
-          draw(p00, p11, p01), ++kept;
+        if (h00 && h10 && h11 && top && right && d) keep(p00, p10, p11);
+        if (h00 && h11 && h01 && d && bottom && left) keep(p00, p11, p01);
       } else {
         const bool d = !broken(kAntiDiagonal, x, y);
-        if (h00 && h10 && h01 && top && d && left) draw(p00, p10, p01), ++kept;
-        if (h10 && h11 && h01 && right && bottom && d)
-          draw(p10, p11, p01), ++kept;
+        if (h00 && h10 && h01 && top && d && left) keep(p00, p10, p01);
+        if (h10 && h11 && h01 && right && bottom && d) keep(p10, p11, p01);
       }
-      if (kept < 2) rim[p00] = rim[p10] = rim[p01] = rim[p11] = 1;
+      if (kept < 2) mesh.rim[p00] = mesh.rim[p10] = mesh.rim[p01] = 1;
+      if (kept < 2) mesh.rim[p11] = 1;
     }
   }
-  return rim;
+  return mesh;
+}
+
+// Whether the triangles of the 3 x 3 blocks around (x, y) are mostly
+// stretched beyond kWarpMaxStretch: the surface there, not one triangle
+// that depth noise drew long, was seen edge-on.
+bool StretchedAround(const Mesh& mesh, int w, int h, int x, int y) {
+  std::array<double, 18> around;
+  int count = 0;
+  for (int yy = std::max(0, y - 1); yy <= std::min(h - 2, y + 1); ++yy)
+    for (int xx = std::max(0, x - 1); xx <= std::min(w - 2, x + 1); ++xx)
+      for (const Triangle& t : mesh.blocks[yy * w + xx])
+        if (t.a >= 0 && !std::isnan(t.stretch)) around[count++] = t.stretch;
+  std::nth_element(around.begin(), around.begin() + count / 2,
+                   around.begin() + count);
+  return around[count / 2] > kWarpMaxStretch;
+}
+
+// Rasterises the mesh's triangles, but those of a stretched surface.
+void DrawMesh(const Vertices& m, const Mesh& mesh, const cv::Vec3f* colour,
+              Canvas* canvas) {
+  const int w = m.width, h = m.height;
+  for (int y = 0; y + 1 < h; ++y) {
+    for (int x = 0; x + 1 < w; ++x) {
+      for (const Triangle& t : mesh.blocks[y * w + x]) {
+        if (t.a < 0 || std::isnan(t.stretch)) continue;
+        if (t.stretch > kWarpMaxStretch && StretchedAround(mesh, w, h, x, y))
+          continue;
+        RasteriseTriangle(m.landing[t.a], m.landing[t.b], m.landing[t.c],
+                          colour[t.a], colour[t.b], colour[t.c], Layer::kMesh,
+                          canvas);
+      }
+    }
+  }
 }
 
 // Each rim vertex also covers its pixel's footprint (the square the source
 // pixel saw, at its depth): the mesh ends at pixel centres, so without it
 // every break would widen by a pixel and a one-pixel structure would vanish.
 void DrawRims(const Vertices& m, const std::vector<std::uint8_t>& rim,
-              const cv::Mat& depth, const Projector& projector,
-              const cv::Vec3f* colour, Canvas* canvas) {
+              const Projector& projector, const cv::Vec3f* colour,
+              Canvas* canvas) {
   for (int y = 0; y < m.height; ++y) {
     for (int x = 0; x < m.width; ++x) {
       const int i = y * m.width + x;
       if (!rim[i] || !m.Has(i)) continue;
-      const double z = depth.at<float>(y, x);
+      const double z = m.z[i];
       const Landing c00 = projector.Land(x, y, z);
       const Landing c10 = projector.Land(x + 1, y, z);
       const Landing c01 = projector.Land(x, y + 1, z);
@@ -352,8 +422,9 @@ WarpResult ForwardWarp(const cv::Mat& rgb, const cv::Mat& depth,
                   std::numeric_limits<double>::infinity());
   canvas.rgb.assign(canvas.z.size(), cv::Vec3f(0, 0, 0));
   canvas.mesh.assign(canvas.z.size(), 0);
-  const std::vector<std::uint8_t> rim = DrawMesh(m, breaks, colour, &canvas);
-  DrawRims(m, rim, depth, projector, colour, &canvas);
+  const Mesh mesh = BuildMesh(m, breaks);
+  DrawMesh(m, mesh, colour, &canvas);
+  DrawRims(m, mesh.rim, projector, colour, &canvas);
 
   WarpResult out;
   out.rgb = cv::Mat(th, tw, CV_32FC3, cv::Scalar::all(0));

@@ -25,6 +25,13 @@ inline constexpr float kWarpJumpFactor = 10.0f;
 // blurred over up to three pixels as in rendered depth, stay a minority,
 // narrow enough to follow a curved surface's slope.
 inline constexpr int kWarpJumpWindow = 7;
+// A triangle that the target sees this many times larger than a patch
+// facing both cameras at its distances, amid triangles that mostly are too,
+// is left out: a surface the source saw nearly edge-on (78 degrees, for a
+// target that faces it) holds no detail for the target. On lady-running's
+// rendered depth, whose soft Gaussian edges join objects into steep
+// sheets, 10 still left long smears across the expanded views.
+inline constexpr double kWarpMaxStretch = 5.0;
 // The crack measure's default kernel: gaps of up to 4 pixels (a surface
 // magnified up to 5x by a splat) count as cracks.
 inline constexpr int kCrackKernel = 5;
@@ -45,7 +52,7 @@ struct WarpResult {
 // interpolated barycentrically (perspective-correct: depth is the plane's
 // through the three points), so a magnified surface stays whole. A pixel is
 // a hole (M_e) only where no surface reaches it: out of the source's view,
-// or a disocclusion.
+// a disocclusion, or a surface the source saw edge-on.
 //
 // A triangle is dropped when one of its edges crosses a depth
 // discontinuity: its log-depth step d = |ln z_a - ln z_b| exceeds both
@@ -54,20 +61,29 @@ struct WarpResult {
 // keeps every surface of exact depth whole; the median is the local scale
 // of one surface's steps (its slope along that direction, or the noise of
 // real depth), so noise of a few percent per pixel breaks nothing while a
-// step that stands out from its neighbours' is an occlusion boundary. Not
-// used: a fixed band (real depth of one surface varies by more than any
-// band an object edge exceeds), and an angle test (a triangle seen edge-on
-// by the source): on noisy depth a pixel-sized triangle's normal is mostly
-// noise (3% at f = 400 px tilts it by more than 80 degrees).
+// step that stands out from its neighbours' is an occlusion boundary. A
+// fixed band fails on real depth, whose steps across one surface exceed
+// what some object edges step.
 //
-// Where the mesh ends (at a dropped triangle, a pixel without depth, the
-// image's border) it stops at pixel centres; there each source pixel also
-// covers its own footprint, the square it saw, at its depth, behind the
-// triangles of its own surface (within kWarpMinJump) and in front of
-// farther ones. A disocclusion is then as wide as the parallax, one-pixel
-// structures survive, and a frame warped into its own camera comes back
-// whole, with an empty mask. Throws pano4d::Error when sizes or types do
-// not match the cameras. Pinhole cameras (RasterCamera) only.
+// A triangle is also dropped where the source saw the surface edge-on: the
+// target sees it more than kWarpMaxStretch times larger than a patch at the
+// same distances that faced both cameras (a camera that is only closer
+// magnifies by the distance ratio and is not stretched), and so do most
+// triangles of the 3 x 3 blocks around it. Measured in the target, not by
+// the triangle's normal in the source: on noisy depth a pixel-sized
+// triangle's normal is mostly noise (3% at f = 400 px tilts it by more than
+// 80 degrees), while its stretch grows only with the baseline, and the vote
+// of its neighbours outweighs a few drawn long by noise.
+//
+// Where the mesh ends at a break, a pixel without depth or the image's
+// border, it stops at pixel centres; there each source pixel also covers
+// its own footprint, the square it saw, at its depth, behind the triangles
+// of its own surface (within kWarpMinJump) and in front of farther ones. A
+// disocclusion is then as wide as the parallax, one-pixel structures
+// survive, and a frame warped into its own camera comes back whole, with an
+// empty mask. An edge-on surface gets no footprints: they would scatter
+// over it as a lace. Throws pano4d::Error when sizes or types do not match
+// the cameras. Pinhole cameras (RasterCamera) only.
 WarpResult ForwardWarp(const cv::Mat& rgb, const cv::Mat& depth,
                        const RasterCamera& source, const RasterCamera& target,
                        const cv::Mat& valid = cv::Mat());
