@@ -250,8 +250,8 @@ std::string ExpansionStepReport::Brief() const {
   s.precision(3);
   s << "expansion step " << step << " (" << angle_degrees << " deg): " << views
     << " views, holes " << 100 * hole_fraction << "% (chained "
-    << 100 * prefilled_fraction << "% of them), " << new_gaussians
-    << " new Gaussians (" << rejected_in_free_space
+    << 100 * prefilled_fraction << "% of them, cracks " << 100 * crack_fraction
+    << "%), " << new_gaussians << " new Gaussians (" << rejected_in_free_space
     << " candidates in seen free space dropped; " << carved
     << " Gaussians there removed), prior " << prior;
   if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
@@ -265,6 +265,7 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"views", views},
           {"hole_fraction", hole_fraction},
           {"prefilled_fraction", prefilled_fraction},
+          {"crack_fraction", crack_fraction},
           {"rejected_in_free_space", rejected_in_free_space},
           {"carved", carved},
           {"new_gaussians", new_gaussians},
@@ -404,7 +405,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   std::vector<Refined> current(directions * ns);
   PointCloud points;
   std::vector<double> point_depths, focals;
-  double hole_sum = 0, holes = 0, prefilled = 0;
+  double hole_sum = 0, holes = 0, prefilled = 0, cracks = 0;
   Json cameras_json = Json::array();
   for (int m = 0; m < directions; ++m) {
     PriorClip clip;
@@ -422,6 +423,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
       const int hole = cv::countNonZero(w.mask);
       hole_sum += static_cast<double>(hole) / w.mask.total();
       holes += hole;
+      cracks += static_cast<double>(CountCracks(w.mask));
       if (chain) {
         const Refined& p = previous_[m * ns + s];
         prefilled +=
@@ -497,6 +499,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   report.views = static_cast<int>(cams.size());
   report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
   report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
+  report.crack_fraction = holes > 0 ? cracks / holes : 0.0;
 
   if (options_.gaussian_refinement) {
     report.carved = Carve(trainer);

@@ -89,6 +89,7 @@ struct ExpansionStepReport {
   int views = 0;
   double hole_fraction = 0.0;       // mean over views of |M_e| / pixels
   double prefilled_fraction = 0.0;  // of M_e, filled by chaining step e-1
+  double crack_fraction = 0.0;      // of M_e, cracks (CountCracks, warp.h)
   std::int64_t new_gaussians = 0;
   std::int64_t rejected_in_free_space =
       0;                    // candidates in known empty space (InFreeSpace)
