@@ -15,7 +15,8 @@ void ApplyAppearance(const float* a, const std::vector<float>& rgb,
   for (std::size_t p = 0; p + 2 < rgb.size(); p += 3) {
     const float r = rgb[p], g = rgb[p + 1], bl = rgb[p + 2];
     for (int c = 0; c < 3; ++c)
-      (*out)[p + c] = a[c * 3] * r + a[c * 3 + 1] * g + a[c * 3 + 2] * bl + b[c];
+      (*out)[p + c] =
+          a[c * 3] * r + a[c * 3 + 1] * g + a[c * 3 + 2] * bl + b[c];
   }
 }
 
@@ -38,10 +39,11 @@ void ApplyAppearanceBackward(const float* a, const std::vector<float>& rgb,
 
 double AppearanceRegulariser(const float* a, double weight,
                              float* d_transform) {
-  const std::vector<float> identity = IdentityAppearance();
   double sum = 0;
   for (int k = 0; k < kAppearanceWidth; ++k) {
-    const double e = double(a[k]) - identity[k];
+    // The identity: ones on the 3 x 3 matrix's diagonal (k = 0, 4, 8).
+    const double identity = (k < 9 && k % 4 == 0) ? 1.0 : 0.0;
+    const double e = double(a[k]) - identity;
     sum += e * e;
     d_transform[k] += static_cast<float>(2.0 * weight * e);
   }

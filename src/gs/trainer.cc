@@ -317,8 +317,8 @@ void Trainer::UpdateLearningRates() {
     appearance_adam_.SetLearningRate(
         0, ExponentialLearningRate(
                options_.lr_appearance,
-               options_.lr_appearance * kFinalLearningRateFraction,
-               iteration_, options_.iterations));
+               options_.lr_appearance * kFinalLearningRateFraction, iteration_,
+               options_.iterations));
   }
   if (scene_.has_motion()) {
     dynamic_adam_.SetLearningRate(dynamic_mean_group_,
@@ -351,9 +351,9 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out,
   rasterizer_.Forward(composed_, camera, settings, out);
   if (appearance_view < 0) return;
   if (appearance_view >= static_cast<int>(views_.size())) {
-    throw Error("render", "appearance view", std::to_string(appearance_view),
-                "there are " + std::to_string(views_.size()) +
-                    " training views");
+    throw Error(
+        "render", "appearance view", std::to_string(appearance_view),
+        "there are " + std::to_string(views_.size()) + " training views");
   }
   std::vector<float> corrected;
   ApplyAppearance(appearance(appearance_view), out->rgb, &corrected);

@@ -53,7 +53,8 @@ float CameraClearance(const cv::Mat& depth) {
       if (row[x] > 0 && std::isfinite(row[x])) valid.push_back(row[x]);
   }
   if (valid.empty()) return 0.0f;
-  const auto nth = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 50);
+  const auto nth =
+      valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 50);
   std::nth_element(valid.begin(), nth, valid.end());
   return kCameraClearance * *nth;
 }
@@ -98,8 +99,8 @@ std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
       empty[i] = by_frames == Sight::kSeenThrough;
       continue;
     }
-    const bool by_a_camera = std::any_of(
-        frames.begin(), frames.end(), [&](const SeenDepth& f) {
+    const bool by_a_camera =
+        std::any_of(frames.begin(), frames.end(), [&](const SeenDepth& f) {
           return f.clearance > 0 &&
                  (p - f.camera.Center()).norm() < f.clearance;
         });

@@ -237,7 +237,8 @@ int MatchValidationCameras(const std::vector<TrainingView>& train,
   constexpr float kSameCentre = 1e-6f;  // times the scene's size
   float size = 0;
   for (const TrainingView& t : train)
-    size = std::max(size, (t.camera.Center() - train[0].camera.Center()).norm());
+    size =
+        std::max(size, (t.camera.Center() - train[0].camera.Center()).norm());
   size = std::max(size, 1.0f);
   int matched = 0;
   for (ValidationView& v : *val) {
@@ -360,11 +361,11 @@ FitSummary FitController::Run() {
   if (o.trainer.appearance) {
     const int matched = MatchValidationCameras(inputs_.train, &inputs_.val);
     summary.validation_appearance =
-        matched == 0 ? "none (no validation camera is a training camera)"
-                     : "the same camera's training frame (" +
-                           std::to_string(matched) + " of " +
-                           std::to_string(inputs_.val.size()) +
-                           " validation frames)";
+        matched == 0
+            ? "none (no validation camera is a training camera)"
+            : "the same camera's training frame (" + std::to_string(matched) +
+                  " of " + std::to_string(inputs_.val.size()) +
+                  " validation frames)";
   }
   const std::unique_ptr<Trainer> owned =
       MakeFitTrainer(std::move(scene), std::move(inputs_.train), o);

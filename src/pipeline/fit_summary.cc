@@ -92,8 +92,7 @@ std::string FitSummary::FullReport() const {
     s += StringPrintf("  %-22s validation renders take %s", "appearance",
                       validation_appearance.c_str());
     if (val_psnr_without_appearance)
-      s += StringPrintf("; PSNR %.3f without it",
-                        *val_psnr_without_appearance);
+      s += StringPrintf("; PSNR %.3f without it", *val_psnr_without_appearance);
     s += "\n";
   }
   if (evaluation) {

@@ -50,19 +50,20 @@ TEST(AppearanceTest, GradientsMatchFiniteDifferences) {
     std::vector<float> plus = rgb, minus = rgb;
     plus[i] += kStep;
     minus[i] -= kStep;
-    const double numeric = (Loss(transform, plus, w) -
-                            Loss(transform, minus, w)) / (2.0 * kStep);
+    const double numeric =
+        (Loss(transform, plus, w) - Loss(transform, minus, w)) / (2.0 * kStep);
     EXPECT_NEAR(d_rgb[i], numeric, 1e-3) << "value " << i;
   }
 }
 
 TEST(AppearanceTest, RegulariserIsZeroAtTheIdentityAndPullsBackToIt) {
   std::vector<float> grad(kAppearanceWidth, 0.0f);
-  EXPECT_EQ(AppearanceRegulariser(IdentityAppearance().data(), 1.0, grad.data()),
-            0.0);
+  EXPECT_EQ(
+      AppearanceRegulariser(IdentityAppearance().data(), 1.0, grad.data()),
+      0.0);
   for (float v : grad) EXPECT_EQ(v, 0.0f);
   std::vector<float> off = IdentityAppearance();
-  off[0] = 1.5f;   // gain of red
+  off[0] = 1.5f;    // gain of red
   off[11] = -0.2f;  // bias of blue
   EXPECT_NEAR(AppearanceRegulariser(off.data(), 2.0, grad.data()),
               2.0 * (0.25 + 0.04), 1e-6);

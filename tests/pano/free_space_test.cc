@@ -164,7 +164,9 @@ TEST(FreeSpaceTest, TheSpaceAroundAVideoCameraIsEmptyUnlessAFrameSawASurface) {
   frame.clearance = CameraClearance(depth);
   // Beside and behind the camera, outside its image: no frame saw there.
   const std::vector<Eigen::Vector3f> points = {
-      {1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -1.0f}, {0.0f, 1.2f, 0.3f},
+      {1.0f, 0.0f, 0.0f},
+      {0.0f, 0.0f, -1.0f},
+      {0.0f, 1.2f, 0.3f},
       {3.0f, 0.0f, 0.0f}};  // the last is outside the ball
   std::vector<float> xyz;
   for (const Eigen::Vector3f& p : points)

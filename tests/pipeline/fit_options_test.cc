@@ -76,9 +76,8 @@ TEST(FitOptionsTest, ToJsonHoldsEveryStruct) {
   for (const char* key :
        {"seed", "trainer", "init", "expand", "expansion", "prior_cmd",
         "panorama_width", "iterations", "depth_weight", "warp_depth",
-        "voxel_pixels", "resume",
-        "deterministic", "checkpoint_every", "validate_every", "log_every",
-        "time_budget"})
+        "voxel_pixels", "resume", "deterministic", "checkpoint_every",
+        "validate_every", "log_every", "time_budget"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["init"].at("num_bases"), InitOptions{}.num_bases);
   EXPECT_TRUE(j["trainer"].at("iterations").is_null());  // from the input
