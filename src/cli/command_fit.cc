@@ -7,6 +7,8 @@
 
 #include "src/cli/app.h"
 #include "src/cli/options.h"
+#include "src/core/error.h"
+#include "src/core/log.h"
 #include "src/pipeline/fit.h"
 
 namespace pano4d::cli {
@@ -15,6 +17,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
   struct Options {
     std::filesystem::path workspace;
     FitOptions fit;
+    bool force = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
@@ -30,6 +33,11 @@ void AddFitCommand(CLI::App& app, Action* action) {
                 "Continue from WS/pano4d/checkpoints/fit.ckpt (the same "
                 "options required: a changed one is refused by name); "
                 "without one, start from the beginning");
+  sub->add_flag("--force", o->force,
+                "Start again on a workspace that holds a fit: the previous "
+                "one is kept in WS/pano4d/previous_fit until the new one "
+                "completes (without --force or --resume such a workspace is "
+                "refused)");
   AddFitOptions(sub, &o->fit);
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary: "
@@ -44,7 +52,31 @@ void AddFitCommand(CLI::App& app, Action* action) {
       "equirectangular PNG per time step and static.png).");
   sub->callback([action, o] {
     *action = [o] {
-      const FitSummary s = RunFit(Workspace(o->workspace), o->fit);
+      const Workspace ws(o->workspace);
+      std::filesystem::path backup;
+      if (!o->fit.resume && std::filesystem::exists(ws.checkpoint())) {
+        if (!o->force) {
+          throw Error::In(ws.checkpoint().string(),
+                          "holds a fit already: --resume continues it, --force "
+                          "starts again (keeping it in " +
+                              (ws.pano4d() / "previous_fit").string() +
+                              " until the new fit completes)");
+        }
+        backup = BackUpPreviousFit(ws);
+        PANO4D_LOG(kInfo) << "fit: --force: the previous fit is kept in "
+                          << backup.string() << " until this one completes";
+      }
+      FitSummary s;
+      try {
+        s = RunFit(ws, o->fit);
+      } catch (...) {
+        if (!backup.empty()) {
+          PANO4D_LOG(kError)
+              << "fit: the previous fit is kept in " << backup.string();
+        }
+        throw;
+      }
+      if (!backup.empty()) std::filesystem::remove_all(backup);
       std::printf("%s", s.FullReport().c_str());
       return kExitOk;
     };

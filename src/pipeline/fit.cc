@@ -303,6 +303,26 @@ FitController::FitController(Workspace workspace, FitOptions options,
       given_(std::move(options)),
       inputs_(std::move(inputs)) {}
 
+std::filesystem::path BackUpPreviousFit(const Workspace& ws) {
+  const fs::path backup = ws.pano4d() / "previous_fit";
+  if (fs::exists(backup)) {
+    throw Error::In(
+        backup.string(),
+        "holds the fit that an earlier `pano4d fit --force` replaced "
+        "and did not complete; move it away (or delete it) first");
+  }
+  for (const fs::path& p :
+       {ws.checkpoint().parent_path(), ws.fit_json(), ws.fit_csv(),
+        ws.fit_plot(), ws.metrics_json(), ws.val_renders(),
+        ws.val_depth_renders(), ws.expansion(), ws.panorama()}) {
+    if (!fs::exists(p)) continue;
+    const fs::path to = backup / fs::relative(p, ws.pano4d());
+    fs::create_directories(to.parent_path());
+    fs::rename(p, to);
+  }
+  return backup;
+}
+
 std::optional<std::string> CheckpointMismatch(const Workspace& ws,
                                               const FitOptions& used) {
   if (!fs::exists(ws.checkpoint())) return "no checkpoint";

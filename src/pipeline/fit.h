@@ -98,6 +98,15 @@ class FitController {
 // LoadFitInputs and FitController::Run in one call.
 FitSummary RunFit(const Workspace& workspace, const FitOptions& options);
 
+// `pano4d fit --force` on a workspace that holds a fit: moves what a fit
+// writes (checkpoints, fit.json, fit.csv and fit.png, metrics.json, the
+// validation renders, expansion/ and panorama/, those that exist) to
+// WS/pano4d/previous_fit/ under the same names, so that nothing is lost
+// if the new fit fails; the caller removes it once the new fit completed.
+// Returns that folder. Throws pano4d::Error naming it when it exists
+// already (the backup of an earlier --force run that did not complete).
+std::filesystem::path BackUpPreviousFit(const Workspace& workspace);
+
 // Whether WS/pano4d/checkpoints/fit.ckpt was written by a fit with these
 // (used) options: the reason it was not, or nothing when it was.
 std::optional<std::string> CheckpointMismatch(const Workspace& workspace,

@@ -269,6 +269,55 @@ TEST_F(FitBinaryTest, MakePairsWritesClipsOfCovisibleVideoMasksAndSource) {
   EXPECT_LT(report.at("mask_fraction").get<double>(), 0.9);
 }
 
+// A finished fit is never replaced silently: without --resume or --force
+// the fit is refused before any work; --force starts again and keeps the
+// previous fit until the new one completes.
+TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
+  const fs::path ws = Workspace("ws_force");
+  ASSERT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 20 --no-expansion",
+                      ws / "fit1.log"),
+            0)
+      << Slurp(ws / "fit1.log");
+  const std::string first = Slurp(ws / "pano4d/fit.json");
+  const std::string checkpoint = Slurp(ws / "pano4d/checkpoints/fit.ckpt");
+  EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 10 --no-expansion",
+                      ws / "fit2.log"),
+            1);
+  const std::string refused = Slurp(ws / "fit2.log");
+  EXPECT_NE(refused.find("fit.ckpt"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("--resume"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("--force"), std::string::npos) << refused;
+  EXPECT_EQ(Slurp(ws / "pano4d/fit.json"), first);
+  EXPECT_EQ(Slurp(ws / "pano4d/checkpoints/fit.ckpt"), checkpoint);
+
+  // --force starts again; the backup goes once the new fit completed.
+  ASSERT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 10 --no-expansion --force",
+                      ws / "fit3.log"),
+            0)
+      << Slurp(ws / "fit3.log");
+  const nlohmann::json fit =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  EXPECT_EQ(fit.at("iterations").get<int>(), 10);
+  EXPECT_FALSE(fs::exists(ws / "pano4d/previous_fit"));
+
+  // A backup left by a --force run that did not complete is never
+  // overwritten.
+  fs::create_directories(ws / "pano4d/previous_fit/checkpoints");
+  EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --iterations 10 --no-expansion --force",
+                      ws / "fit4.log"),
+            1);
+  EXPECT_NE(Slurp(ws / "fit4.log").find("previous_fit"), std::string::npos)
+      << Slurp(ws / "fit4.log");
+  EXPECT_EQ(nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"))
+                .at("iterations")
+                .get<int>(),
+            10);
+}
+
 // Expansion products where users and viewers look for them, and a video
 // prior that fails: the CPU prior fills in, the log says why, the fit ends.
 TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {
