@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 #include "src/core/frames.h"
 #include "src/core/json.h"
 #include "src/gs/trainer.h"
@@ -57,8 +58,7 @@ void AddMakePairsCommand(CLI::App& app, Action* action) {
   sub->add_option("--elevation", o->pairs.elevation_degrees,
                   "Angle reached at the clip's last frame, degrees")
       ->capture_default_str();
-  sub->add_option("--seed", o->pairs.seed, "Seed of the random directions")
-      ->capture_default_str();
+  AddSeedOption(sub, &o->pairs.seed, "Seed of the random directions");
   sub->footer(
       "Writes OUT/clip_<k>/cov/, mask/ (255 = lost in the round trip, to "
       "generate), src/ and meta.json (directions, angles, cameras), and "

@@ -26,9 +26,7 @@ void AddSynthCommand(CLI::App& app, Action* action) {
       "depth, instance and dynamic masks, covisible masks) in the DyCheck "
       "iPhone layout");
   AddPresetOption(sub, &o->synth.preset);
-  sub->add_option("--seed", o->synth.seed,
-                  "Scene variation; same seed, same bytes")
-      ->capture_default_str();
+  AddSeedOption(sub, &o->synth.seed, "Scene variation; same seed, same bytes");
   sub->add_option("--out", o->out,
                   "Output folder (created; files in it are replaced)")
       ->required();
@@ -59,9 +57,9 @@ void AddSynthCommand(CLI::App& app, Action* action) {
           s.preset.name.c_str(), s.preset.width, s.preset.height,
           s.preset.train_frames, s.preset.val_frames, s.seed,
           s.is_static ? ", static" : "", s.varied ? ", varied" : "",
-          o->out.c_str(), timer.WallSeconds(),
-          s.render_seconds, s.covisibility_seconds, s.write_seconds,
-          100.0 * s.unseen_fraction, s.covisibility_threshold);
+          o->out.c_str(), timer.WallSeconds(), s.render_seconds,
+          s.covisibility_seconds, s.write_seconds, 100.0 * s.unseen_fraction,
+          s.covisibility_threshold);
       return kExitOk;
     };
   });

@@ -144,9 +144,36 @@ void AddNoExpansionFlag(CLI::App* app, bool* expand) {
       "ablation)");
 }
 
-void AddFitOptions(CLI::App* app, FitOptions* o) {
-  app->add_option("--seed", o->seed, "Seed of every random choice")
+namespace {
+
+// Unsigned parsing accepts "-1" and wraps it; a seed must not.
+const CLI::Validator kNonNegativeSeed(
+    [](std::string& value) -> std::string {
+      const auto first = value.find_first_not_of(" \t");
+      if (first != std::string::npos && value[first] == '-')
+        return "a seed is a non-negative integer, not " + value;
+      return "";
+    },
+    "NONNEGATIVE");
+
+}  // namespace
+
+CLI::Option* AddSeedOption(CLI::App* app, std::uint64_t* seed,
+                           const std::string& help) {
+  return app->add_option("--seed", *seed, help)
+      ->check(kNonNegativeSeed)
       ->capture_default_str();
+}
+
+CLI::Option* AddSeedOption(CLI::App* app, std::uint32_t* seed,
+                           const std::string& help) {
+  return app->add_option("--seed", *seed, help)
+      ->check(kNonNegativeSeed)
+      ->capture_default_str();
+}
+
+void AddFitOptions(CLI::App* app, FitOptions* o) {
+  AddSeedOption(app, &o->seed, "Seed of every random choice");
   app->add_option_function<int>(
          "--iterations", [o](int n) { o->iterations = n; },
          "Training iterations (default: 100 per training frame, 2000 to "

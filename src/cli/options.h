@@ -5,6 +5,7 @@
 // (`fit`, `run` and `demo` all call AddFitOptions). A flag maps onto one
 // field; its default is the field's, shown by --help.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -19,6 +20,13 @@ class Option;
 }  // namespace CLI
 
 namespace pano4d::cli {
+
+// --seed: an unsigned 64-bit seed. A negative value is a usage error
+// (unsigned parsing would wrap -1 to 18446744073709551615).
+CLI::Option* AddSeedOption(CLI::App* app, std::uint64_t* seed,
+                           const std::string& help);
+CLI::Option* AddSeedOption(CLI::App* app, std::uint32_t* seed,
+                           const std::string& help);
 
 // --iterations, --max-gaussians and the loss weights (--smoothness-weight,
 // --normal-weight, --hidden-weight, --hidden-thickness,

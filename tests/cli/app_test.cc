@@ -67,6 +67,28 @@ TEST(CliTest, UsageErrorsExitSixtyFour) {
             kExitUsage);
 }
 
+TEST(CliTest, ANegativeSeedIsAUsageErrorNotAWrappedOne) {
+  // Unsigned parsing would take -1 as 18446744073709551615.
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"fit", "--workspace", PANO4D_SOURCE_DIR,
+                                 "--seed", "-1"},
+        std::vector<std::string>{"synth", "--out", "never_written", "--seed",
+                                 "-1"},
+        std::vector<std::string>{"make-pairs", "--workspace", PANO4D_SOURCE_DIR,
+                                 "--out", "never_written", "--seed", "-3"}}) {
+    const Result r = RunCli(args);
+    EXPECT_EQ(r.status, kExitUsage) << args[0];
+    EXPECT_NE(r.err.find("non-negative"), std::string::npos)
+        << args[0] << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists("never_written"));
+  // A non-negative seed passes the check (the command then fails on the
+  // source folder, which is no workspace: not a usage error).
+  EXPECT_EQ(
+      RunCli({"fit", "--workspace", PANO4D_SOURCE_DIR, "--seed", "7"}).status,
+      kExitError);
+}
+
 TEST(CliTest, SfmRefusesBadOptionsBeforeRunningAnything) {
   // No input: one line naming the flags.
   Result r = RunCli({"sfm", "--workspace", "ws_never_created"});
