@@ -7,6 +7,7 @@
 
 #include "src/cli/app.h"
 #include "src/cli/options.h"
+#include "src/core/file.h"
 #include "src/pipeline/depth.h"
 
 namespace pano4d::cli {
@@ -36,6 +37,7 @@ void AddDepthCommand(CLI::App& app, Action* action) {
   sub->callback([action, o] {
     *action = [o] {
       const Workspace ws(o->workspace);
+      RemoveLeftoverTemporaries(ws.root());
       const DepthSummary s = RunDepth(ws, o->depth);
       std::printf("pano4d depth: %s\n  frames: %s\n", s.BriefReport().c_str(),
                   ws.frames_json().c_str());

@@ -8,6 +8,7 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/core/error.h"
+#include "src/core/file.h"
 #include "src/core/log.h"
 #include "src/pipeline/fit.h"
 
@@ -53,6 +54,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
   sub->callback([action, o] {
     *action = [o] {
       const Workspace ws(o->workspace);
+      RemoveLeftoverTemporaries(ws.root());
       std::filesystem::path backup;
       if (!o->fit.resume && std::filesystem::exists(ws.checkpoint())) {
         if (!o->force) {

@@ -4,13 +4,17 @@
 
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <regex>
 #include <system_error>
 
 #include "src/core/error.h"
+#include "src/core/log.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -46,6 +50,34 @@ std::vector<std::uint8_t> ReadFileBytes(const fs::path& path) {
 std::string ReadTextFile(const fs::path& path) {
   const std::vector<std::uint8_t> bytes = ReadFileBytes(path);
   return std::string(bytes.begin(), bytes.end());
+}
+
+int RemoveLeftoverTemporaries(const fs::path& dir) {
+  static const std::regex kTemporary(R"(.*\.tmp\.([0-9]+)\.[0-9]+(\.[^.]*)?)");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return 0;
+  std::vector<fs::path> leftovers;
+  for (auto it = fs::recursive_directory_iterator(
+           dir, fs::directory_options::skip_permission_denied, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;
+    std::smatch m;
+    const std::string name = it->path().filename().string();
+    if (!std::regex_match(name, m, kTemporary)) continue;
+    const long long pid = std::stoll(m[1].str());
+    // kill(pid, 0) fails with ESRCH when no such process runs.
+    if (pid > 0 && pid <= std::numeric_limits<pid_t>::max() &&
+        ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
+      leftovers.push_back(it->path());
+  }
+  int removed = 0;
+  for (const fs::path& p : leftovers) removed += fs::remove(p, ec) ? 1 : 0;
+  if (removed > 0) {
+    PANO4D_LOG(kInfo) << "removed " << removed
+                      << " temporary file(s) that a killed run left under "
+                      << dir.string();
+  }
+  return removed;
 }
 
 fs::path TemporaryPathFor(const fs::path& path) {

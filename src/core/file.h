@@ -29,6 +29,13 @@ void WriteAtomically(
 void WriteFileAtomically(const std::filesystem::path& path,
                          std::string_view bytes);
 
+// Removes the temporaries that WriteAtomically left under `dir` (recursive)
+// when its process was killed: files named like TemporaryPathFor's whose
+// process id no longer runs (a live process may still be writing). Logs
+// and returns the count; a file that cannot be removed is left and not
+// counted. `fit`, `depth` and `run` call it on their workspace first.
+int RemoveLeftoverTemporaries(const std::filesystem::path& dir);
+
 // Creates `dir` (and parents) or throws an Error naming it.
 void EnsureDirectory(const std::filesystem::path& dir);
 

@@ -240,6 +240,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   if (!o.dataset.empty())
     o.depth.factor = LoadDataset(o.dataset, o.depth.factor).factor;
   EnsureDirectory(ws.pano4d());
+  RemoveLeftoverTemporaries(ws.root());
   if (!o.colmap.empty()) AdoptColmapWorkspace(ws);
   PlanFacts facts = GatherFacts(o);
   Plan plan = MakePlan(facts);

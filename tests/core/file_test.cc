@@ -1,5 +1,8 @@
 #include "src/core/file.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
@@ -33,6 +36,32 @@ TEST(FileTest, AtomicWriteReplacesAndLeavesNoTemporary) {
   WriteFileAtomically(path, "second");
   EXPECT_EQ(ReadTextFile(path), "second");
   EXPECT_EQ(CountEntries(dir / "sub"), 1);
+}
+
+TEST(FileTest, LeftoverTemporariesOfDeadProcessesAreRemoved) {
+  TempDir dir;
+  // The id of a process that has ended: a child that exits at once.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  const std::string dead = std::to_string(child);
+  const std::string live = std::to_string(::getpid());
+  std::filesystem::create_directories(dir / "sub");
+  const std::vector<std::filesystem::path> leftovers = {
+      dir / ("fit.tmp." + dead + ".0.ckpt"),
+      dir / "sub" / ("00001.tmp." + dead + ".12.png"),
+      dir / "sub" / ("noext.tmp." + dead + ".3")};
+  const std::vector<std::filesystem::path> kept = {
+      dir / ("fit.tmp." + live + ".1.ckpt"),  // its writer still runs
+      dir / "fit.ckpt", dir / "sub" / "a.tmp.png", dir / "sub" / "tmp.5.6"};
+  for (const auto& p : leftovers) WriteFileAtomically(p, "x");
+  for (const auto& p : kept) WriteFileAtomically(p, "x");
+  EXPECT_EQ(RemoveLeftoverTemporaries(dir.path()), 3);
+  for (const auto& p : leftovers) EXPECT_FALSE(std::filesystem::exists(p)) << p;
+  for (const auto& p : kept) EXPECT_TRUE(std::filesystem::exists(p)) << p;
+  EXPECT_EQ(RemoveLeftoverTemporaries(dir / "missing"), 0);
 }
 
 TEST(FileTest, FailedWriteKeepsThePreviousVersion) {
