@@ -21,7 +21,7 @@ class Option;
 
 namespace pano4d::cli {
 
-// --seed: an unsigned 64-bit seed. A negative value is a usage error
+// --seed into an unsigned seed. A negative value is a usage error
 // (unsigned parsing would wrap -1 to 18446744073709551615).
 CLI::Option* AddSeedOption(CLI::App* app, std::uint64_t* seed,
                            const std::string& help);

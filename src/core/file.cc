@@ -53,7 +53,8 @@ std::string ReadTextFile(const fs::path& path) {
 }
 
 int RemoveLeftoverTemporaries(const fs::path& dir) {
-  static const std::regex kTemporary(R"(.*\.tmp\.([0-9]+)\.[0-9]+(\.[^.]*)?)");
+  static const std::regex kTemporary(
+      R"(.*\.tmp\.([0-9]{1,10})\.[0-9]+(\.[^.]*)?)");
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return 0;
   std::vector<fs::path> leftovers;

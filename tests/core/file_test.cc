@@ -55,7 +55,8 @@ TEST(FileTest, LeftoverTemporariesOfDeadProcessesAreRemoved) {
       dir / "sub" / ("noext.tmp." + dead + ".3")};
   const std::vector<std::filesystem::path> kept = {
       dir / ("fit.tmp." + live + ".1.ckpt"),  // its writer still runs
-      dir / "fit.ckpt", dir / "sub" / "a.tmp.png", dir / "sub" / "tmp.5.6"};
+      dir / "fit.ckpt", dir / "sub" / "a.tmp.png", dir / "sub" / "tmp.5.6",
+      dir / "big.tmp.99999999999999999999.1.png"};  // no such id
   for (const auto& p : leftovers) WriteFileAtomically(p, "x");
   for (const auto& p : kept) WriteFileAtomically(p, "x");
   EXPECT_EQ(RemoveLeftoverTemporaries(dir.path()), 3);
