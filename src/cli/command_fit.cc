@@ -61,7 +61,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
           throw Error::In(ws.checkpoint().string(),
                           "holds a fit already: --resume continues it, --force "
                           "starts again (keeping it in " +
-                              (ws.pano4d() / "previous_fit").string() +
+                              ws.previous_fit().string() +
                               " until the new fit completes)");
         }
         backup = BackUpPreviousFit(ws);

@@ -156,20 +156,24 @@ const CLI::Validator kNonNegativeSeed(
     },
     "NONNEGATIVE");
 
-}  // namespace
-
-CLI::Option* AddSeedOption(CLI::App* app, std::uint64_t* seed,
-                           const std::string& help) {
+template <typename Seed>
+CLI::Option* AddUnsignedSeed(CLI::App* app, Seed* seed,
+                             const std::string& help) {
   return app->add_option("--seed", *seed, help)
       ->check(kNonNegativeSeed)
       ->capture_default_str();
 }
 
+}  // namespace
+
+CLI::Option* AddSeedOption(CLI::App* app, std::uint64_t* seed,
+                           const std::string& help) {
+  return AddUnsignedSeed(app, seed, help);
+}
+
 CLI::Option* AddSeedOption(CLI::App* app, std::uint32_t* seed,
                            const std::string& help) {
-  return app->add_option("--seed", *seed, help)
-      ->check(kNonNegativeSeed)
-      ->capture_default_str();
+  return AddUnsignedSeed(app, seed, help);
 }
 
 void AddFitOptions(CLI::App* app, FitOptions* o) {

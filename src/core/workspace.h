@@ -55,6 +55,10 @@ class Workspace {
     return pano4d() / "checkpoints" / "fit.ckpt";
   }
   std::filesystem::path fit_json() const { return pano4d() / "fit.json"; }
+  // `fit --force`: the fit it replaces, until the new one completes.
+  std::filesystem::path previous_fit() const {
+    return pano4d() / "previous_fit";
+  }
   std::filesystem::path metrics() const { return pano4d() / "metrics"; }
   std::filesystem::path fit_csv() const { return metrics() / "fit.csv"; }
   std::filesystem::path fit_plot() const { return metrics() / "fit.png"; }

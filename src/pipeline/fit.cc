@@ -304,7 +304,7 @@ FitController::FitController(Workspace workspace, FitOptions options,
       inputs_(std::move(inputs)) {}
 
 std::filesystem::path BackUpPreviousFit(const Workspace& ws) {
-  const fs::path backup = ws.pano4d() / "previous_fit";
+  const fs::path backup = ws.previous_fit();
   if (fs::exists(backup)) {
     throw Error::In(
         backup.string(),
