@@ -1,10 +1,12 @@
 #include "src/datasets/dycheck_dataset.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/log.h"
 #include "src/datasets/dycheck_camera.h"
 
 namespace pano4d {
@@ -16,35 +18,13 @@ std::string FactorFolder(int factor) { return std::to_string(factor) + "x"; }
 std::vector<DatasetFrame> ReadSplit(const fs::path& root,
                                     const std::string& split, int factor) {
   const fs::path path = root / "splits" / (split + ".json");
-  const Json json = ReadJson(path);
-  const auto names = GetJson<Json>(json, "frame_names", path.string());
-  const std::vector<int> cameras =
-      GetJson<std::vector<int>>(json, "camera_ids", path.string());
-  const std::vector<int> times =
-      GetJson<std::vector<int>>(json, "time_ids", path.string());
-  if (!names.is_array() || names.size() != cameras.size() ||
-      names.size() != times.size()) {
-    throw Error(
-        path.string(), "frame_names", std::to_string(names.size()) + " entries",
-        "frame_names, camera_ids and time_ids must have the same length");
-  }
   std::vector<DatasetFrame> frames;
-  frames.reserve(names.size());
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    const std::string field = "frame_names[" + std::to_string(i) + "]";
-    if (!names[i].is_string()) {
-      throw Error(path.string(), field, JsonValueForMessage(names[i]),
-                  "expected a string");
-    }
+  for (const DyCheckSplitEntry& entry :
+       ParseDyCheckSplit(ReadJson(path), path.string())) {
     DatasetFrame frame;
-    frame.id = names[i].get<std::string>();
-    if (frame.id.empty() || frame.id.find('/') != std::string::npos ||
-        frame.id == "..") {
-      throw Error(path.string(), field, "\"" + frame.id + "\"",
-                  "not a valid frame name");
-    }
-    frame.camera_id = cameras[i];
-    frame.time_id = times[i];
+    frame.id = entry.id;
+    frame.camera_id = entry.camera_id;
+    frame.time_id = entry.time_id;
     const fs::path camera_path = root / "camera" / (frame.id + ".json");
     const PosedCamera full = ReadDyCheckCamera(camera_path);
     frame.camera = full;
@@ -136,6 +116,66 @@ Json SplitJson(const std::vector<DyCheckScene::Frame>& frames) {
 
 }  // namespace
 
+std::vector<DyCheckSplitEntry> ParseDyCheckSplit(const Json& json,
+                                                 const std::string& source) {
+  const auto names = GetJson<Json>(json, "frame_names", source);
+  const std::vector<int> cameras =
+      GetJson<std::vector<int>>(json, "camera_ids", source);
+  const std::vector<int> times =
+      GetJson<std::vector<int>>(json, "time_ids", source);
+  if (!names.is_array() || names.size() != cameras.size() ||
+      names.size() != times.size()) {
+    throw Error(
+        source, "frame_names", std::to_string(names.size()) + " entries",
+        "frame_names, camera_ids and time_ids must have the same length");
+  }
+  std::vector<DyCheckSplitEntry> entries;
+  entries.reserve(names.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const auto field = [i](const std::string& list) {
+      return list + "[" + std::to_string(i) + "]";
+    };
+    if (!names[i].is_string()) {
+      throw Error(source, field("frame_names"), JsonValueForMessage(names[i]),
+                  "expected a string");
+    }
+    DyCheckSplitEntry entry{names[i].get<std::string>(), cameras[i], times[i]};
+    if (entry.id.empty() || entry.id.find('/') != std::string::npos ||
+        entry.id == "." || entry.id == "..") {
+      throw Error(source, field("frame_names"), "\"" + entry.id + "\"",
+                  "not a valid frame name");
+    }
+    if (entry.time_id < 0) {
+      throw Error(source, field("time_ids"), std::to_string(entry.time_id),
+                  "must be >= 0");
+    }
+    entries.push_back(std::move(entry));
+  }
+  return entries;
+}
+
+int MakeTimeIdsDense(std::vector<DatasetFrame*> frames,
+                     const std::string& source) {
+  std::vector<int> times;
+  for (const DatasetFrame* f : frames) times.push_back(f->time_id);
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  if (times.empty()) return 0;
+  if (times.back() + 1 == static_cast<int>(times.size()))
+    return static_cast<int>(times.size());
+  PANO4D_LOG(kWarning) << source << ": time ids 0.." << times.back()
+                       << " name " << times.size()
+                       << " times; numbered 0.." << times.size() - 1
+                       << " in their order (the motion model holds one "
+                          "pose per time)";
+  for (DatasetFrame* f : frames) {
+    f->time_id = static_cast<int>(
+        std::lower_bound(times.begin(), times.end(), f->time_id) -
+        times.begin());
+  }
+  return static_cast<int>(times.size());
+}
+
 bool LooksLikeDyCheck(const fs::path& root) {
   return fs::is_regular_file(root / "dataset.json") &&
          fs::is_directory(root / "splits") && fs::is_directory(root / "camera");
@@ -152,10 +192,11 @@ Dataset ReadDyCheck(const fs::path& root, int factor) {
   dataset.factor = factor;
   dataset.train = ReadSplit(root, "train", factor);
   dataset.val = ReadSplit(root, "val", factor);
-  for (const auto* split : {&dataset.train, &dataset.val}) {
-    for (const DatasetFrame& f : *split)
-      dataset.num_times = std::max(dataset.num_times, f.time_id + 1);
-  }
+  std::vector<DatasetFrame*> frames;
+  for (auto* split : {&dataset.train, &dataset.val})
+    for (DatasetFrame& f : *split) frames.push_back(&f);
+  dataset.num_times =
+      MakeTimeIdsDense(frames, (root / "splits").string() + "/*.json");
   const fs::path extra_path = root / "extra.json";
   if (fs::exists(extra_path)) {
     const Json extra = ReadJson(extra_path);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "src/datasets/dataset.h"
 
@@ -27,6 +28,25 @@ bool LooksLikeDyCheck(const std::filesystem::path& root);
 // and covisible files are not required to exist (`dataset info` reports
 // which do); a frame named in a split without its camera file is an error.
 Dataset ReadDyCheck(const std::filesystem::path& root, int factor);
+
+// One entry of splits/<name>.json.
+struct DyCheckSplitEntry {
+  std::string id;  // the frame's file stem, e.g. "0_00012"
+  int camera_id = 0;
+  int time_id = 0;
+};
+// A split's frame_names, camera_ids and time_ids, checked: the same lengths,
+// names usable as file names, time ids >= 0. Throws pano4d::Error naming
+// `source` and the entry.
+std::vector<DyCheckSplitEntry> ParseDyCheckSplit(const nlohmann::json& json,
+                                                 const std::string& source);
+
+// Numbers the frames' time ids 0..T-1 in their order when they leave gaps
+// (a split of every tenth time, or one stray id of 100000, which would
+// otherwise ask the motion model for a pose per missing time), logging a
+// warning that names `source`. Returns T, the count of distinct times.
+int MakeTimeIdsDense(std::vector<DatasetFrame*> frames,
+                     const std::string& source);
 
 // The metadata of a scene to write in DyCheck's layout.
 struct DyCheckScene {

@@ -10,6 +10,7 @@
 
 #include "src/core/error.h"
 #include "src/core/file.h"
+#include "src/core/hash.h"
 #include "src/core/json.h"
 #include "src/gs/trainer.h"
 
@@ -17,12 +18,36 @@ namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr char kCheckpointMagic[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '1'};
+// Version 2 ends in a checksum; version 1 (no checksum, no scene
+// fingerprint) is still read for its scene, never resumed.
+constexpr char kCheckpointMagic[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '2'};
+constexpr char kCheckpointMagicV1[8] = {'P', '4', 'D',
+                                        'C', 'K', 'P', 'T', '1'};
+constexpr std::size_t kChecksumSize = sizeof(std::uint64_t);
 
 }  // namespace
 
-// Checkpoint layout: 8-byte magic, uint64 header length, JSON header, then
-// the arrays the header lists, float32 little-endian, in order.
+std::string ViewsFingerprint(const std::vector<TrainingView>& views) {
+  Hash64 hash;
+  for (const TrainingView& v : views) {
+    hash.AddString(v.name);
+    hash.AddValue(v.time);
+    const RasterCamera& c = v.camera;
+    for (float x : {static_cast<float>(c.width), static_cast<float>(c.height),
+                    c.fx, c.fy, c.cx, c.cy})
+      hash.AddValue(x);
+    hash.Add(c.rotation.data(), 9 * sizeof(float));
+    hash.Add(c.translation.data(), 3 * sizeof(float));
+    hash.AddArray(v.rgb);
+    hash.AddArray(v.depth);
+    hash.AddArray(v.dynamic);
+  }
+  return hash.Hex();
+}
+
+// Checkpoint layout: 8-byte magic, uint64 header length, JSON header, the
+// arrays the header lists (float32 little-endian, in order), then the
+// Hash64 of every byte before it.
 void Trainer::SaveCheckpoint(const fs::path& path) const {
   std::vector<std::pair<std::string, const std::vector<float>*>> arrays;
   const auto add_model = [&](const std::string& prefix,
@@ -67,6 +92,7 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
                            {"iteration", iteration_},
                            {"options", options_.ToJson()},
                            {"fingerprint", fingerprint_},
+                           {"scene", scene_fingerprint_},
                            {"views", names},
                            {"rng", rng_state.str()},
                            {"order", order_},
@@ -87,44 +113,62 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
   const std::string text = header.dump();
   WriteAtomically(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
-    out.write(kCheckpointMagic, sizeof(kCheckpointMagic));
+    Hash64 checksum;
+    const auto write = [&](const void* data, std::size_t size) {
+      checksum.Add(data, size);
+      out.write(static_cast<const char*>(data),
+                static_cast<std::streamsize>(size));
+    };
+    write(kCheckpointMagic, sizeof(kCheckpointMagic));
     const std::uint64_t length = text.size();
-    out.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    for (const auto& [name, values] : arrays) {
-      out.write(reinterpret_cast<const char*>(values->data()),
-                static_cast<std::streamsize>(values->size() * sizeof(float)));
-    }
+    write(&length, sizeof(length));
+    write(text.data(), text.size());
+    for (const auto& [name, values] : arrays)
+      write(values->data(), values->size() * sizeof(float));
+    const std::uint64_t sum = checksum.value();
+    out.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
     out.flush();
     if (!out) throw Error(tmp.string(), "", "", "write failed (disk full?)");
   });
 }
 
-void Trainer::LoadCheckpoint(const fs::path& path) {
-  try {
-    LoadCheckpointUnchecked(path);
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), "header", "",
-                std::string("malformed checkpoint header: ") + e.what());
-  }
-}
-
-namespace {
-
-// A checkpoint file read into memory: its JSON header and where each array
-// lies.
+// A checkpoint file read into memory and checked against its checksum: its
+// JSON header and where each array lies.
 struct CheckpointFile {
   std::string source;
   std::vector<std::uint8_t> bytes;
   Json header;
   std::map<std::string, std::pair<std::size_t, std::size_t>> arrays;
 
-  explicit CheckpointFile(const fs::path& path) : source(path.string()) {
-    bytes = ReadFileBytes(path);
+  bool checked = false;  // version 2: the checksum matched
+
+  CheckpointFile(std::vector<std::uint8_t> data, std::string name)
+      : source(std::move(name)), bytes(std::move(data)) {
     constexpr std::size_t kPrefix = sizeof(kCheckpointMagic) + 8;
-    if (bytes.size() < kPrefix ||
-        std::memcmp(bytes.data(), kCheckpointMagic, sizeof(kCheckpointMagic))) {
+    if (bytes.size() < kPrefix) {
+      throw Error(source, "size", std::to_string(bytes.size()),
+                  "too short for a pano4d checkpoint (truncated?)");
+    }
+    checked = !std::memcmp(bytes.data(), kCheckpointMagic, 8);
+    if (!checked && std::memcmp(bytes.data(), kCheckpointMagicV1, 8))
       throw Error(source, "magic", "", "not a pano4d checkpoint");
+    if (checked) {
+      if (bytes.size() < kPrefix + kChecksumSize) {
+        throw Error(source, "size", std::to_string(bytes.size()),
+                    "too short for a pano4d checkpoint (truncated?)");
+      }
+      std::uint64_t stored = 0;
+      std::memcpy(&stored, bytes.data() + bytes.size() - kChecksumSize,
+                  kChecksumSize);
+      bytes.resize(bytes.size() - kChecksumSize);
+      Hash64 sum;
+      sum.Add(bytes.data(), bytes.size());
+      if (sum.value() != stored) {
+        throw Error(source, "checksum", "",
+                    "the file does not match its checksum (corrupted on "
+                    "disk, or copied or written only in part); fit without "
+                    "--resume to start over");
+      }
     }
     std::uint64_t length = 0;
     std::memcpy(&length, bytes.data() + sizeof(kCheckpointMagic), 8);
@@ -193,34 +237,62 @@ struct CheckpointFile {
   }
 };
 
-}  // namespace
+namespace {
 
-Json ReadCheckpointFingerprint(const fs::path& path) {
+// Runs `read` on the checkpoint, a malformed header (a missing key, a value
+// of another type) reported as an Error naming `source`.
+template <typename Read>
+auto WithHeaderErrors(const std::string& source, Read read) {
   try {
-    const CheckpointFile file(path);
-    return file.header.contains("fingerprint") ? file.header["fingerprint"]
-                                               : Json();
+    return read();
   } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), "header", "",
+    throw Error(source, "header", "",
                 std::string("malformed checkpoint header: ") + e.what());
   }
+}
+
+}  // namespace
+
+Json ReadCheckpointFingerprint(std::vector<std::uint8_t> bytes,
+                               const std::string& source) {
+  return WithHeaderErrors(source, [&] {
+    const CheckpointFile file(std::move(bytes), source);
+    return file.header.contains("fingerprint") ? file.header["fingerprint"]
+                                               : Json();
+  });
+}
+
+Json ReadCheckpointFingerprint(const fs::path& path) {
+  return ReadCheckpointFingerprint(ReadFileBytes(path), path.string());
+}
+
+GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
+                                  const std::string& source) {
+  return WithHeaderErrors(source, [&] {
+    return CheckpointFile(std::move(bytes), source).Scene();
+  });
+}
+
+GaussianScene ReadCheckpointScene(const fs::path& path) {
+  return ReadCheckpointScene(ReadFileBytes(path), path.string());
 }
 
 void Trainer::SetFingerprint(nlohmann::json fingerprint) {
   fingerprint_ = std::move(fingerprint);
 }
 
-GaussianScene ReadCheckpointScene(const fs::path& path) {
-  try {
-    return CheckpointFile(path).Scene();
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), "header", "",
-                std::string("malformed checkpoint header: ") + e.what());
-  }
+void Trainer::LoadCheckpoint(const fs::path& path) {
+  LoadCheckpoint(ReadFileBytes(path), path.string());
 }
 
-void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
-  const CheckpointFile file(path);
+void Trainer::LoadCheckpoint(std::vector<std::uint8_t> bytes,
+                             const std::string& source) {
+  WithHeaderErrors(source, [&] {
+    Restore(CheckpointFile(std::move(bytes), source));
+  });
+}
+
+void Trainer::Restore(const CheckpointFile& file) {
   const std::string& source = file.source;
   const Json& header = file.header;
   std::vector<std::string> names;
@@ -242,6 +314,34 @@ void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
                 "this run has " + JsonValueForMessage(d->second) +
                     ": resume with the options the checkpoint was written "
                     "with, or fit without --resume to start over");
+  }
+  if (!file.checked) {
+    throw Error(source, "format", "version 1",
+                "written by an older pano4d, without a checksum or the "
+                "scene it belongs to: it renders but does not resume; fit "
+                "without --resume, or with --force, to start over");
+  }
+  const std::string scene = header.at("scene").get<std::string>();
+  if (scene != scene_fingerprint_) {
+    throw Error(source, "scene", scene,
+                "this workspace's frames hash to " + scene_fingerprint_ +
+                    ": the checkpoint was written for other images, "
+                    "cameras, times or depth (copied from another "
+                    "workspace, or the frames changed since); fit without "
+                    "--resume, or with --force, to start over");
+  }
+  const std::int64_t iteration = header.at("iteration").get<std::int64_t>();
+  if (iteration < 0 || iteration > options_.iterations) {
+    throw Error(source, "iteration", std::to_string(iteration),
+                "outside this run's 0.." +
+                    std::to_string(options_.iterations) +
+                    " (corrupt checkpoint)");
+  }
+  for (const auto& [name, step] : header.at("adam_steps").items()) {
+    if (step.get<std::int64_t>() < 0 || step.get<std::int64_t>() > iteration)
+      throw Error(source, "adam_steps." + name, step.dump(),
+                  "outside 0.." + std::to_string(iteration) +
+                      " (corrupt checkpoint)");
   }
   if (header.at("num_bases").get<int>() != scene_.bases.num_bases ||
       header.at("sh_degree").get<int>() != scene_.statics.sh_degree ||
@@ -307,7 +407,7 @@ void Trainer::LoadCheckpointUnchecked(const fs::path& path) {
                 "past the end of the epoch order (corrupt checkpoint)");
   }
   reset_done_ = header.at("reset_done").get<bool>();
-  iteration_ = header.at("iteration").get<std::int64_t>();
+  iteration_ = iteration;
   const std::vector<std::int64_t> counters =
       header.at("counters").get<std::vector<std::int64_t>>();
   if (counters.size() == 4) {

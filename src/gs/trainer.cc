@@ -227,6 +227,7 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
   if (views_.empty()) {
     throw Error("fit", "views", "0", "no training views");
   }
+  scene_fingerprint_ = ViewsFingerprint(views_);
   for (const TrainingView& v : views_) {
     if (v.time < 0 || v.time >= scene_.num_times) {
       throw Error(

@@ -160,10 +160,22 @@ struct PhaseTimes {
 // The scene stored in a checkpoint (to construct the Trainer that
 // LoadCheckpoint then restores). Throws pano4d::Error naming the file when
 // it is not a pano4d checkpoint, is truncated or holds non-finite values.
+// The byte overloads read a checkpoint in memory (`source` names it in
+// errors); the path overloads read the file.
 GaussianScene ReadCheckpointScene(const std::filesystem::path& path);
+GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
+                                  const std::string& source);
 // The fingerprint a checkpoint was written with (Trainer::SetFingerprint);
 // null for a checkpoint from before pano4d stored one.
 nlohmann::json ReadCheckpointFingerprint(const std::filesystem::path& path);
+nlohmann::json ReadCheckpointFingerprint(std::vector<std::uint8_t> bytes,
+                                         const std::string& source);
+
+// The scene the views show, as a checkpoint records it: a hash of their
+// names, times, cameras, images, depth and dynamic masks.
+std::string ViewsFingerprint(const std::vector<TrainingView>& views);
+
+struct CheckpointFile;  // checkpoint.cc
 
 class Trainer {
  public:
@@ -206,10 +218,13 @@ class Trainer {
   // generator, the epoch order) and the fingerprint, written atomically
   // (checkpoint.cc).
   void SaveCheckpoint(const std::filesystem::path& path) const;
-  // Throws pano4d::Error naming the file when it is corrupt, belongs to
-  // other frames, or holds another fingerprint (naming the first key that
-  // differs and both values).
+  // Throws pano4d::Error naming the file when it is corrupt (its checksum,
+  // an iteration outside this run's), belongs to other frames or another
+  // scene (ViewsFingerprint), or holds another fingerprint (naming the
+  // first key that differs and both values).
   void LoadCheckpoint(const std::filesystem::path& path);
+  void LoadCheckpoint(std::vector<std::uint8_t> bytes,
+                      const std::string& source);
   // What a run resuming from this trainer's checkpoints must share with the
   // run that wrote them: the trainer's options, unless the caller owns more
   // (the fit's resume fingerprint, src/pipeline/fit_options.h).
@@ -237,7 +252,7 @@ class Trainer {
  private:
   void RegisterGroups();
   RasterSettings Settings() const;
-  void LoadCheckpointUnchecked(const std::filesystem::path& path);
+  void Restore(const CheckpointFile& file);
   int NextView();
   void Densify(bool prune_large);
   void ResetOpacities();
@@ -254,6 +269,7 @@ class Trainer {
   nlohmann::json fingerprint_;
   GaussianScene scene_;
   std::vector<TrainingView> views_;
+  std::string scene_fingerprint_;  // ViewsFingerprint(views_)
   double extent_ = 1.0;
   std::vector<float> median_depth_;  // per view, 0 when it has none
   // log of options_.max_static_scale_pixels in world units; +inf: none.

@@ -318,6 +318,54 @@ TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
             10);
 }
 
+// A checkpoint copied from another scene whose frames have the same names,
+// and one with a flipped bit: --resume refuses both by name, and the
+// workspace's own checkpoint still resumes.
+TEST_F(FitBinaryTest, ResumeRefusesAnotherScenesOrACorruptCheckpoint) {
+  const fs::path other = dir_->path() / "tiny_other";
+  ASSERT_EQ(RunPano4d("synth --preset tiny --seed 4 --out '" + other.string() +
+                          "'",
+                      dir_->path() / "synth_other.log"),
+            0);
+  const fs::path ws = Workspace("ws_own");
+  const fs::path ws_other = dir_->path() / "ws_other";
+  ASSERT_EQ(RunPano4d("depth --workspace '" + ws_other.string() +
+                          "' --dataset '" + other.string() + "'",
+                      dir_->path() / "depth_other.log"),
+            0);
+  const std::string fit = " --iterations 10 --no-expansion";
+  for (const fs::path& w : {ws, ws_other}) {
+    ASSERT_EQ(RunPano4d("fit --workspace '" + w.string() + "'" + fit,
+                        w / "fit.log"),
+              0)
+        << Slurp(w / "fit.log");
+  }
+  const fs::path ckpt = ws / "pano4d/checkpoints/fit.ckpt";
+  const std::string own = Slurp(ckpt);
+  const auto resume = [&](const std::string& bytes) {
+    {
+      std::ofstream out(ckpt, std::ios::binary | std::ios::trunc);
+      out << bytes;
+    }
+    const int rc = RunPano4d(
+        "fit --workspace '" + ws.string() + "' --resume" + fit, ws / "r.log");
+    return std::make_pair(rc, Slurp(ws / "r.log"));
+  };
+  const auto [rc_other, log_other] =
+      resume(Slurp(ws_other / "pano4d/checkpoints/fit.ckpt"));
+  EXPECT_EQ(rc_other, 1) << log_other;
+  EXPECT_NE(log_other.find("fit.ckpt: field 'scene'"), std::string::npos)
+      << log_other;
+  std::string flipped = own;
+  flipped[flipped.size() / 2] ^= 0x04;
+  const auto [rc_flip, log_flip] = resume(flipped);
+  EXPECT_EQ(rc_flip, 1) << log_flip;
+  EXPECT_NE(log_flip.find("checksum"), std::string::npos) << log_flip;
+  const auto [rc_own, log_own] = resume(own);
+  EXPECT_EQ(rc_own, 0) << log_own;
+  EXPECT_NE(log_own.find("resumed from"), std::string::npos) << log_own;
+}
+
 // Expansion products where users and viewers look for them, and a video
 // prior that fails: the CPU prior fills in, the log says why, the fit ends.
 TEST_F(FitBinaryTest, ExpansionWritesItsProductsAndSurvivesAFailingPrior) {

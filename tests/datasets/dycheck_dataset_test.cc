@@ -121,5 +121,32 @@ TEST(DyCheckDatasetTest, MissingCameraAndBadSplitsNameTheFile) {
   EXPECT_THROW(LoadDataset(dir / "nowhere", 2), Error);
 }
 
+// One stray time id of 100000 would ask the motion model for 100001 poses:
+// ids with gaps are numbered densely in their order, negative ones refused.
+TEST(DyCheckDatasetTest, TimeIdsWithGapsAreNumberedDenselyNegativeRefused) {
+  testing::TempDir dir;
+  DyCheckScene scene = RandomScene(3, 1);
+  scene.train[2].time_id = 100000;
+  scene.val[0].time_id = scene.val[1].time_id = 1;
+  WriteDyCheckMetadata(dir.path(), scene);
+  const Dataset d = LoadDataset(dir.path(), 1);
+  EXPECT_EQ(d.num_times, 3);
+  EXPECT_EQ(d.train[2].time_id, 2);
+  EXPECT_EQ(d.train[2].id, DyCheckFrameId(0, 100000));
+  EXPECT_EQ(d.val[0].time_id, 1);
+
+  WriteJson(dir / "splits" / "train.json",
+            Json{{"frame_names", {"0_00000"}},
+                 {"camera_ids", {0}},
+                 {"time_ids", {-4}}});
+  try {
+    LoadDataset(dir.path(), 1);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "time_ids[0]");
+    EXPECT_EQ(e.source(), (dir / "splits" / "train.json").string());
+  }
+}
+
 }  // namespace
 }  // namespace pano4d

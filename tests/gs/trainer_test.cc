@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <random>
 
@@ -10,6 +12,7 @@
 
 #include "src/core/error.h"
 #include "src/core/file.h"
+#include "src/core/hash.h"
 #include "src/core/image.h"
 #include "src/gs/surface_loss.h"
 #include "src/render/bench_scene.h"
@@ -247,6 +250,97 @@ TEST(TrainerTest, CheckpointOfOtherOptionsOrTruncatedIsRefused) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("fit.ckpt"), std::string::npos);
   }
+}
+
+// `bytes` (a version 2 checkpoint) with `edit` applied to its header text
+// and the checksum recomputed, as a careful hand would leave it.
+std::vector<std::uint8_t> WithHeaderEdited(
+    const std::vector<std::uint8_t>& bytes,
+    const std::function<void(std::string*)>& edit) {
+  const std::string file(bytes.begin(), bytes.end());
+  std::uint64_t length = 0;
+  std::memcpy(&length, file.data() + 8, 8);
+  std::string header = file.substr(16, length);
+  edit(&header);
+  const auto word = [](std::uint64_t value) {
+    return std::string(reinterpret_cast<const char*>(&value), 8);
+  };
+  std::string out = file.substr(0, 8) + word(header.size()) + header +
+                    file.substr(16 + length, file.size() - 24 - length);
+  Hash64 sum;
+  sum.Add(out);
+  out += word(sum.value());
+  return std::vector<std::uint8_t>(out.begin(), out.end());
+}
+
+// The message of the Error that `load` throws ("" when none).
+std::string ErrorOf(const std::function<void()>& load) {
+  try {
+    load();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(TrainerTest, CheckpointOfAnotherSceneCorruptOrEditedIsRefusedByName) {
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
+  Trainer a(teacher, views, FastOptions(10), /*seed=*/0);
+  for (int i = 0; i < 3; ++i) a.Step();
+  testing::TempDir dir;
+  a.SaveCheckpoint(dir / "a.ckpt");
+  const std::vector<std::uint8_t> bytes = ReadFileBytes(dir / "a.ckpt");
+  const auto load = [&](const std::vector<TrainingView>& v,
+                        std::vector<std::uint8_t> b) {
+    return ErrorOf([&] {
+      Trainer t(teacher, v, FastOptions(10), /*seed=*/0);
+      t.LoadCheckpoint(std::move(b), "a.ckpt");
+    });
+  };
+  EXPECT_EQ(load(views, bytes), "");
+
+  // The same frame names over other pixels: another scene.
+  std::vector<TrainingView> other = views;
+  other[1].rgb[5] += 0.25f;
+  EXPECT_NE(load(other, bytes).find("a.ckpt: field 'scene'"),
+            std::string::npos)
+      << load(other, bytes);
+  other = views;
+  other[0].camera.translation.x() += 0.01f;
+  EXPECT_NE(load(other, bytes).find("'scene'"), std::string::npos);
+
+  // A flipped bit anywhere: the checksum.
+  for (std::size_t at : {std::size_t{20}, bytes.size() / 2, bytes.size() - 9}) {
+    std::vector<std::uint8_t> flipped = bytes;
+    flipped[at] ^= 0x10;
+    EXPECT_NE(load(views, flipped).find("checksum"), std::string::npos) << at;
+  }
+  // Cut short: named as such, not a crash.
+  EXPECT_NE(load(views, std::vector<std::uint8_t>(bytes.begin(),
+                                                  bytes.begin() + 12))
+                .find("too short"),
+            std::string::npos);
+
+  // A header edited with its checksum made to match: the iteration is
+  // bounded by the run's, the optimisers' steps by the iteration.
+  const auto edited = [&](const std::string& from, const std::string& to) {
+    return WithHeaderEdited(bytes, [&](std::string* h) {
+      const std::size_t at = h->find(from);
+      ASSERT_NE(at, std::string::npos) << from << " in " << *h;
+      h->replace(at, from.size(), to);
+    });
+  };
+  EXPECT_EQ(load(views, edited("\"iteration\":3", "\"iteration\":4")), "");
+  EXPECT_NE(load(views, edited("\"iteration\":3", "\"iteration\":1000000000"))
+                .find("'iteration' = 1000000000"),
+            std::string::npos);
+  EXPECT_NE(load(views, edited("\"static\":3", "\"static\":-2"))
+                .find("adam_steps.static"),
+            std::string::npos);
+  EXPECT_NE(load(views, edited("\"scene\":\"", "\"scene\":\"0"))
+                .find("'scene'"),
+            std::string::npos);
 }
 
 TEST(TrainerTest, DensificationRespectsTheCap) {
