@@ -16,8 +16,10 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
+#include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/progress.h"
+#include "src/core/stamp.h"
 #include "src/core/timer.h"
 #include "src/core/video.h"
 #include "src/core/workspace.h"
@@ -41,30 +43,52 @@ class Stamps {
 
   // The seconds the step took when it completed with the same inputs, or
   // nullopt when it must run (no stamp, other inputs, an earlier step ran,
-  // --force).
+  // --force), with the reason in why_run().
   std::optional<double> Done(const std::string& step,
                              const nlohmann::json& inputs) {
-    if (force_ || redo_) return std::nullopt;
+    if (force_) return Redo("--force");
+    if (redo_) return Redo("an earlier step ran");
     std::ifstream in(dir_ / (step + ".done.json"));
     const nlohmann::json stamp =
         nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
     if (!stamp.is_object() ||
-        stamp.value("inputs", nlohmann::json()) != inputs ||
-        !stamp.value("seconds", nlohmann::json()).is_number()) {
-      redo_ = true;
-      return std::nullopt;
-    }
+        !stamp.value("seconds", nlohmann::json()).is_number())
+      return Redo("it has not completed in this workspace");
+    const nlohmann::json stamped = stamp.value("inputs", nlohmann::json());
+    if (!stamped.is_object()) return Redo("its stamp is unreadable");
+    // As stamp.h compares a stage's inputs: files said by name.
+    const auto as_stage = [](nlohmann::json in) {
+      nlohmann::json files = in.value("files", nlohmann::json::object());
+      in.erase("files");
+      return nlohmann::json{{"options", in}, {"files", files}};
+    };
+    if (const std::optional<std::string> why =
+            InputsDifference(as_stage(stamped), as_stage(inputs)))
+      return Redo(*why);
     return stamp["seconds"].get<double>();
   }
+  const std::string& why_run() const { return why_run_; }
   void Mark(const std::string& step, const nlohmann::json& inputs,
             double seconds) {
     const nlohmann::json stamp = {{"inputs", inputs}, {"seconds", seconds}};
     WriteFileAtomically(dir_ / (step + ".done.json"), stamp.dump(2) + "\n");
     redo_ = true;  // everything after a step that ran runs again
   }
-  void Invalidate() { redo_ = true; }
+  void Clear(const std::string& step) {
+    fs::remove(dir_ / (step + ".done.json"));
+  }
+  void Invalidate(const std::string& why) {
+    redo_ = true;
+    why_run_ = why;
+  }
 
  private:
+  std::optional<double> Redo(const std::string& why) {
+    Invalidate(why);
+    return std::nullopt;
+  }
+
+  std::string why_run_;
   fs::path dir_;
   bool force_;
   bool redo_ = false;
@@ -334,13 +358,15 @@ SfmReport RunSfm(const SfmOptions& o) {
     Timer timer;
     std::optional<double> earlier = stamps.Done(name, inputs);
     if (earlier && !outputs_exist()) {
-      stamps.Invalidate();
+      stamps.Invalidate("its outputs are gone");
       earlier.reset();
     }
     if (earlier) {
       PANO4D_LOG(kInfo) << "sfm: " << name << ": complete from an earlier run";
     } else {
-      PANO4D_LOG(kInfo) << "sfm: " << name << " ...";
+      PANO4D_LOG(kInfo) << "sfm: " << name << " ... (" << stamps.why_run()
+                        << ")";
+      stamps.Clear(name);  // a step that fails half way leaves no stamp
       run();
       stamps.Mark(name, inputs, timer.WallSeconds());
     }
@@ -364,6 +390,15 @@ SfmReport RunSfm(const SfmOptions& o) {
          for (const KnownFrame& f : o.known)
            images.push_back(fs::absolute(f.image).string());
          return images;
+       }()},
+      // What the frames are read from, by size and modification time: a
+      // frame replaced in the folder makes the step run again.
+      {"files", [&] {
+         StageInputs files(ws);
+         if (!o.video.empty()) files.File(o.video);
+         if (!o.images.empty()) files.File(o.images);
+         for (const KnownFrame& f : o.known) files.File(f.image);
+         return files.json()["files"];
        }()}};
   step("frames", frame_inputs, exists(images_dir),
        [&] { WriteFrames(o, images_dir); });

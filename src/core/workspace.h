@@ -48,6 +48,8 @@ class Workspace {
   std::filesystem::path depth_map(const std::string& frame) const {
     return depth() / (frame + ".npy");
   }
+  // Per stage the inputs it completed with (stamp.h).
+  std::filesystem::path stamps() const { return pano4d() / "stamps"; }
   // run: the plan, the facts it was made from and per stage its status.
   std::filesystem::path plan_json() const { return pano4d() / "plan.json"; }
   // fit.

@@ -16,6 +16,7 @@
 #include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/progress.h"
+#include "src/core/stamp.h"
 #include "src/core/strings.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/depth_map.h"
@@ -372,8 +373,36 @@ std::string DepthSummary::BriefReport() const {
       frames.depth_source.c_str());
 }
 
+StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
+  StageInputs in(ws.root());
+  in.Option("depth", o.ToJson());
+  if (!o.dataset.empty()) {
+    in.Option("dataset", fs::weakly_canonical(o.dataset).string());
+    in.File(o.dataset);
+  }
+  // The model of `pano4d sfm` (or an adopted COLMAP workspace), whose
+  // frames or sparse points the stage reads.
+  in.File(ws.sfm_json());
+  if (fs::exists(ws.sfm_json())) {
+    const Json sfm = ReadJson(ws.sfm_json());
+    for (const char* key : {"model", "images"}) {
+      if (sfm.contains(key) && sfm[key].is_string())
+        in.File(ws.root() / sfm[key].get<std::string>());
+    }
+  }
+  in.File(ws.dynamic_masks());
+  in.File(ws.undistorted_dynamic_masks());
+  if (!o.depth_dir.empty()) in.File(o.depth_dir);
+  // Its outputs: one removed or edited by hand is noticed.
+  in.File(ws.frames_json());
+  in.File(ws.depth());
+  return in;
+}
+
 DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   o.Check();
+  const StageStamp stamp(ws, "depth");
+  stamp.Remove();
   EnsureDirectory(ws.depth());
   DepthSummary summary;
   WorkspaceFrames& frames = summary.frames;
@@ -406,6 +435,7 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   WriteWorkspaceFrames(ws.root(), frames);
   for (const WorkspaceFrame& f : frames.train)
     summary.with_depth += !f.depth.empty();
+  stamp.Write(DepthStageInputs(ws, o));
   return summary;
 }
 

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/frames.h"
+#include "src/core/stamp.h"
 #include "src/core/workspace.h"
 #include "src/datasets/dataset.h"
 #include "src/geometry/stereo.h"
@@ -43,7 +44,15 @@ struct DepthSummary {
   std::string BriefReport() const;
 };
 
+// Writes WS/pano4d/frames.json and the depth maps, and the stage's stamp
+// (DepthStageInputs) once they are complete.
 DepthSummary RunDepth(const Workspace& workspace, const DepthOptions& options);
+
+// What the depth stage reads (its options; the dataset's files, or the SfM
+// model, images and masks; --depth-dir) and writes, for its stamp:
+// `pano4d run` reuses the stage while its stamp records the same.
+StageInputs DepthStageInputs(const Workspace& workspace,
+                             const DepthOptions& options);
 
 // The depth source RunDepth takes (one of kDepthFrom*, frames.h): the order
 // of preference above. The planner names it before any work.

@@ -15,6 +15,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/stamp.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/datasets/dataset.h"
@@ -120,22 +121,13 @@ bool FitComplete(const Workspace& ws, int iterations) {
          !j.value("stopped_by_time_budget", false);
 }
 
-// Whether frames.json was listed from this input with the planned depth
-// source: a dataset at the same path and factor, or (video, images, COLMAP)
-// any, since the depth stage writes it last.
-bool FramesFromThisInput(const Workspace& ws, const RunOptions& o,
-                         const PlanFacts& facts) {
-  if (!fs::exists(ws.frames_json())) return false;
-  const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
-  if (frames.depth_source != facts.depth_source) return false;
-  if (facts.depth_source == kDepthFromExternal &&
-      frames.depth_options.value("depth_dir", "") != o.depth.depth_dir.string())
-    return false;
-  if (o.dataset.empty()) return true;
-  return frames.dataset_factor == o.depth.factor &&
-         fs::weakly_canonical(frames.dataset) ==
-             fs::weakly_canonical(o.dataset);
-}
+// A stage's status in plan.json when an earlier run's outputs are reused.
+constexpr char kReused[] = "complete from an earlier run";
+
+struct StageResult {
+  std::string status;
+  std::string why;  // what changed, or why nothing needs to run
+};
 
 // What would stop a stage of the plan half way, checked before the first:
 // the colmap executable for sfm, the LPIPS weights for eval, a depth map per
@@ -251,13 +243,17 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   WritePlan(ws, o, plan, summary.stages);
   Timer total;
 
+  // A stage's body returns its status ("done", "complete from an earlier
+  // run", ...) and why it ran or was reused; plan.json records both.
   const auto stage = [&](const std::string& name, const auto& body) {
     Timer t;
-    const std::string status = body();
-    summary.stages[name] = {{"status", status}, {"seconds", t.WallSeconds()}};
+    const StageResult r = body();
+    summary.stages[name] = {
+        {"status", r.status}, {"why", r.why}, {"seconds", t.WallSeconds()}};
     WritePlan(ws, o, plan, summary.stages);
-    PANO4D_LOG(kInfo) << "run: " << name << ": " << status << " ("
-                      << t.WallSeconds() << " s)";
+    PANO4D_LOG(kInfo) << "run: " << name << ": " << r.status
+                      << (r.why.empty() ? "" : " (" + r.why + ")") << ", "
+                      << t.WallSeconds() << " s";
   };
 
   if (plan.Runs("sfm")) {
@@ -269,17 +265,28 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       s.factor = o.depth.factor;
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
-      return std::string("done");
+      std::string ran;
+      for (const SfmStepReport& step : r.report.steps)
+        if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
+      return ran.empty()
+                 ? StageResult{kReused, "every step's inputs are unchanged"}
+                 : StageResult{"done", "ran " + ran};
     });
   }
+  // Reused while its stamp records the same inputs; when it runs, the fit
+  // that followed an earlier run of it starts again.
+  bool depth_ran = false;
   stage("depth", [&] {
-    if (FramesFromThisInput(ws, o, plan.facts))
-      return std::string("complete from an earlier run");
     DepthOptions d = o.depth;
     d.dataset = o.dataset;
+    const std::optional<std::string> stale =
+        StageStamp(ws, "depth").StaleReason(DepthStageInputs(ws, d));
+    if (!stale) return StageResult{kReused, "nothing it reads changed"};
+    PANO4D_LOG(kInfo) << "run: depth runs: " << *stale;
+    depth_ran = true;
     const DepthSummary r = RunDepth(ws, d);
     PANO4D_LOG(kInfo) << "depth: " << r.BriefReport();
-    return std::string(plan.Runs("depth") ? "estimated" : "listed");
+    return StageResult{plan.Runs("depth") ? "estimated" : "listed", *stale};
   });
 
   // The dynamic masks exist now: the motion decision.
@@ -294,11 +301,13 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     if (!plan.Runs("motion")) f.init.num_bases = 0;
     if (!plan.Runs("expansion")) f.expand = false;
     const FitOptions used = ResolveFitOptions(f, FitInputOf(frames));
-    const std::optional<std::string> mismatch = CheckpointMismatch(ws, used);
+    std::optional<std::string> mismatch = CheckpointMismatch(ws, used);
+    if (!mismatch && depth_ran) mismatch = "the depth stage ran again";
     if (!mismatch && FitComplete(ws, used.trainer.iterations))
-      return std::string("complete from an earlier run");
+      return StageResult{kReused, "a finished fit with these options on "
+                                  "these frames"};
     if (mismatch && fs::exists(ws.checkpoint())) {
-      PANO4D_LOG(kInfo) << "run: fit: the workspace's fit had other options ("
+      PANO4D_LOG(kInfo) << "run: fit: the workspace's fit is not this one's ("
                         << *mismatch << "); fitting from the start";
       // Its expansion products would otherwise be reported as this fit's.
       fs::remove_all(ws.expansion());
@@ -307,7 +316,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     f.resume = !mismatch;
     const FitSummary r = RunFit(ws, f);
     if (progress) *progress << r.FullReport() << std::flush;
-    return std::string("done");
+    return StageResult{"done", mismatch ? *mismatch : "resumed its checkpoint"};
   });
 
   if (plan.Runs("eval")) {
@@ -323,7 +332,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
         *progress << r.markdown << "\nwritten to " << r.out.string()
                   << ": metrics.json, metrics.md, per_frame.csv\n";
       }
-      return std::string("done");
+      return StageResult{"done", ""};
     });
   }
   summary.report = WriteReport(ws);

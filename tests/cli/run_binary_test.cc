@@ -109,6 +109,63 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
   EXPECT_FALSE(fs::exists(ws / "pano4d/expansion"));
 }
 
+// A dataset file edited after a run: the depth stage runs again, saying
+// which file changed, and the fit starts again on the new frames. A corrupt
+// depth map stops the run naming it; once it is fixed the same command
+// completes.
+TEST_F(RunBinaryTest, AChangedInputRunsItsStagesAgainAndAFixedOneCompletes) {
+  const fs::path data = dir_->path() / "tiny_edited";
+  fs::copy(dir_->path() / "tiny", data, fs::copy_options::recursive);
+  const fs::path ws = dir_->path() / "ws_edited";
+  const fs::path log = dir_->path() / "run_edited.log";
+  const std::string run = "run --dataset '" + data.string() +
+                          "' --workspace '" + ws.string() +
+                          "' --iterations 10 --no-expansion";
+  ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
+
+  // Another training image in place of frame 3.
+  fs::copy_file(data / "rgb/2x/0_00002.png", data / "rgb/2x/0_00003.png",
+                fs::copy_options::overwrite_existing);
+  fs::last_write_time(data / "rgb/2x/0_00003.png",
+                      fs::last_write_time(data / "rgb/2x/0_00003.png") +
+                          std::chrono::seconds(5));
+  ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
+  nlohmann::json results = ReadJson(ws / "pano4d/plan.json")["results"];
+  EXPECT_EQ(results["depth"]["status"], "listed") << results.dump(2);
+  EXPECT_NE(results["depth"]["why"].get<std::string>().find(
+                "rgb/2x/0_00003.png changed"),
+            std::string::npos)
+      << results.dump(2);
+  EXPECT_EQ(results["fit"]["status"], "done");
+  EXPECT_EQ(results["fit"]["why"], "the depth stage ran again");
+  EXPECT_NE(Slurp(log).find("run: depth runs: "), std::string::npos);
+
+  // A truncated depth map: the run stops naming it.
+  const fs::path depth = data / "depth/2x/0_00001.npy";
+  const std::string good = Slurp(depth);
+  {
+    std::ofstream out(depth, std::ios::binary | std::ios::trunc);
+    out << good.substr(0, good.size() / 2);
+  }
+  EXPECT_EQ(RunPano4d(run, log), 1);
+  EXPECT_NE(Slurp(log).find("0_00001.npy"), std::string::npos) << Slurp(log);
+  {
+    std::ofstream out(depth, std::ios::binary | std::ios::trunc);
+    out << good;
+  }
+  ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
+  results = ReadJson(ws / "pano4d/plan.json")["results"];
+  EXPECT_EQ(results["depth"]["status"], "listed");
+  EXPECT_EQ(results["fit"]["status"], "done");
+
+  // Unchanged: both reused, and the log says so.
+  ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
+  results = ReadJson(ws / "pano4d/plan.json")["results"];
+  EXPECT_EQ(results["depth"]["status"], "complete from an earlier run");
+  EXPECT_EQ(results["depth"]["why"], "nothing it reads changed");
+  EXPECT_EQ(results["fit"]["status"], "complete from an earlier run");
+}
+
 TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
   const fs::path ws = dir_->path() / "ws_static";
   const fs::path log = dir_->path() / "run_static.log";

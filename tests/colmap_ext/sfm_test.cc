@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "colmap_ext/alignment.h"
 #include "colmap_ext/colmap_runner.h"
@@ -117,6 +118,33 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
+}
+
+// One frame of another size stops sfm; once the frame is replaced the
+// same command completes: the frames step's stamp records every frame's
+// size and modification time, not only the folder.
+TEST_F(SfmTest, AFixedFrameIsNoticedAndTheRerunCompletes) {
+  testing::TempDir& dir = *dir_;
+  const fs::path images = dir / "train_fixed";
+  fs::copy(dir / "train", images);
+  const fs::path frame = images / (dataset_->train[3].id + ".png");
+  const cv::Mat good = ReadImage(frame).ToBgr8();
+  cv::Mat half;
+  cv::resize(good, half, cv::Size(good.cols / 2, good.rows / 2));
+  WritePng8(frame, half);
+  SfmOptions options;
+  options.images = images;
+  options.workspace = dir / "ws_fixed";
+  options.matcher = "sequential";
+  EXPECT_THROW(RunSfm(options), Error);
+  WritePng8(frame, good);
+  fs::last_write_time(frame,
+                      fs::last_write_time(frame) + std::chrono::seconds(5));
+  const SfmReport report = RunSfm(options);
+  ASSERT_FALSE(report.steps.empty());
+  EXPECT_EQ(report.steps.front().step, "frames");
+  EXPECT_FALSE(report.steps.front().skipped);
+  EXPECT_GE(report.registered, 0.9 * report.frames);
 }
 
 TEST(SfmInputTest, AWorkspacesOwnImagesAreNeverOverwritten) {
