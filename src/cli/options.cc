@@ -131,6 +131,13 @@ void AddExpansionProductOptions(CLI::App* app, FitOptions* o) {
                   "(folders; see README). Without it, the CPU geometry prior. "
                   "When the command fails, the CPU prior fills in and the log "
                   "says why");
+  app->add_option("--prior-timeout", o->prior_timeout,
+                  "Seconds one clip may take in --prior-cmd before the "
+                  "command (and all it started) is stopped and the CPU prior "
+                  "fills the clip; a video diffusion model on a GPU takes "
+                  "minutes per clip")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app->add_option("--panorama-width", o->panorama_width,
                   "Width of the panoramas in WS/pano4d/panorama (height half)")
       ->check(CLI::Range(2, 16384))

@@ -1,16 +1,19 @@
 #include "src/core/subprocess.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "src/core/error.h"
@@ -38,12 +41,83 @@ std::optional<fs::path> FindOnPath(const std::string& name) {
 }
 
 std::string ProcessResult::How() const {
+  if (timed_out) return "stopped at its time limit";
   return signal != 0 ? "killed by signal " + std::to_string(signal)
                      : "exit status " + std::to_string(exit_code);
 }
 
+namespace {
+
+// The signal (SIGINT or SIGTERM) pano4d received while a child of its own
+// group ran, or 0.
+volatile std::sig_atomic_t g_received = 0;
+
+void Remember(int signal) { g_received = signal; }
+
+// While alive: SIGINT and SIGTERM are remembered, not acted on; the
+// previous actions come back at the end.
+class SignalsRemembered {
+ public:
+  SignalsRemembered() {
+    g_received = 0;
+    struct sigaction action {};
+    action.sa_handler = Remember;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~SignalsRemembered() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+// Polls the child every this many milliseconds while it may have to be
+// stopped (a time limit, a signal to pass on).
+constexpr int kPollMilliseconds = 10;
+
+// Waits for `pid`; nullopt when `seconds` passed first (seconds < 0: no
+// limit) or a signal was remembered.
+std::optional<int> WaitFor(pid_t pid, double seconds, rusage* usage,
+                           const std::string& what) {
+  const Timer timer;
+  int status = 0;
+  while (true) {
+    const pid_t done = wait4(pid, &status, WNOHANG, usage);
+    if (done == pid) return status;
+    if (done < 0 && errno != EINTR) {
+      throw Error(what, "", "",
+                  std::string("wait4 failed: ") + std::strerror(errno));
+    }
+    if (g_received != 0 || (seconds >= 0 && timer.WallSeconds() > seconds))
+      return std::nullopt;
+    ::usleep(kPollMilliseconds * 1000);
+  }
+}
+
+// Stops the group `pid` leads: SIGTERM, then SIGKILL after the grace.
+int StopGroup(pid_t pid, rusage* usage, const std::string& what) {
+  ::kill(-pid, SIGTERM);
+  const std::sig_atomic_t received = g_received;
+  g_received = 0;  // the grace is waited for even after Ctrl-C
+  std::optional<int> status = WaitFor(pid, kStopGraceSeconds, usage, what);
+  if (!status) {
+    ::kill(-pid, SIGKILL);
+    g_received = 0;
+    status = WaitFor(pid, -1, usage, what);
+  }
+  ::kill(-pid, SIGKILL);  // what the child left behind in its group
+  if (received != 0) g_received = received;
+  return *status;
+}
+
+}  // namespace
+
 ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
-                         const fs::path& log) {
+                         const fs::path& log, const ProcessOptions& options) {
   if (argv_strings.empty())
     throw Error("RunProcess", "argv", "", "no executable given");
   EnsureDirectory(log.parent_path());
@@ -65,24 +139,50 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null",
                                    O_RDONLY, 0);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  if (options.own_group) {
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
+  }
+  std::optional<SignalsRemembered> remembered;
+  if (options.own_group) remembered.emplace();
   const Timer timer;
   pid_t pid = 0;
   const int spawn_error =
-      posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+      posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (spawn_error != 0) {
     throw Error(argv_strings[0], "", "",
                 std::string("cannot start: ") + std::strerror(spawn_error));
   }
+  const std::string& what = argv_strings[0];
   int status = 0;
   rusage usage{};
-  while (wait4(pid, &status, 0, &usage) < 0) {
-    if (errno != EINTR) {
-      throw Error(argv_strings[0], "", "",
-                  std::string("wait4 failed: ") + std::strerror(errno));
-    }
-  }
   ProcessResult r;
+  if (!options.own_group) {
+    while (wait4(pid, &status, 0, &usage) < 0) {
+      if (errno != EINTR) {
+        throw Error(what, "", "",
+                    std::string("wait4 failed: ") + std::strerror(errno));
+      }
+    }
+  } else {
+    const double limit =
+        options.timeout_seconds > 0 ? options.timeout_seconds : -1.0;
+    if (const std::optional<int> done = WaitFor(pid, limit, &usage, what)) {
+      status = *done;
+    } else {
+      r.timed_out = g_received == 0;
+      status = StopGroup(pid, &usage, what);
+    }
+    const int received = g_received;
+    remembered.reset();
+    // Ctrl-C (or SIGTERM) while the child ran: the child's group is
+    // stopped; now pano4d ends as the signal would have ended it.
+    if (received != 0) std::raise(received);
+  }
   r.seconds = timer.WallSeconds();
   r.peak_memory_mib = usage.ru_maxrss / 1024.0;  // Linux: kilobytes
   if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);

@@ -1,7 +1,5 @@
 #include "src/pano/prior.h"
 
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -19,6 +17,8 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/strings.h"
+#include "src/core/subprocess.h"
 #include "src/geometry/inpaint.h"
 #include "src/pano/trajectory.h"
 #include "src/pano/warp.h"
@@ -238,18 +238,25 @@ std::string LastLogLine(const fs::path& log) {
   return last;
 }
 
-// Runs the shell command line; returns the problem, empty when it exited 0.
-std::string RunShell(const std::string& line, const fs::path& log) {
-  const int status = std::system(line.c_str());
-  if (status == 0) return "";
+// Runs the shell command line in its own process group, output to `log`,
+// stopped after `timeout_seconds` (0: no limit); returns the problem, empty
+// when it exited 0.
+std::string RunShell(const std::string& line, const fs::path& log,
+                     double timeout_seconds) {
+  const ProcessResult r = RunProcess({"/bin/sh", "-c", line}, log,
+                                     {.timeout_seconds = timeout_seconds,
+                                      .own_group = true});
+  if (r.ok()) return "";
   std::string problem;
-  if (status == -1) {
-    problem = "could not be started";
-  } else if (WIFSIGNALED(status)) {
-    problem = "was killed by signal " + std::to_string(WTERMSIG(status));
+  if (r.timed_out) {
+    problem = StringPrintf(
+        "was stopped at its time limit of %g s (--prior-timeout)",
+        timeout_seconds);
+  } else if (r.signal != 0) {
+    problem = "was killed by signal " + std::to_string(r.signal);
   } else {
-    problem = "exited with status " + std::to_string(WEXITSTATUS(status));
-    if (WEXITSTATUS(status) == 127) problem += " (command not found?)";
+    problem = "exited with status " + std::to_string(r.exit_code);
+    if (r.exit_code == 127) problem += " (command not found?)";
   }
   const std::string last = LastLogLine(log);
   if (!last.empty()) problem += ": \"" + last + "\"";
@@ -383,10 +390,12 @@ PriorResult GeometryPrior::Fill(const PriorClip& clip) {
 }
 
 CommandPrior::CommandPrior(std::string command, fs::path work_dir,
-                           std::unique_ptr<Prior> fallback)
+                           std::unique_ptr<Prior> fallback,
+                           double timeout_seconds)
     : command_(std::move(command)),
       work_dir_(fs::absolute(work_dir)),
-      fallback_(std::move(fallback)) {
+      fallback_(std::move(fallback)),
+      timeout_seconds_(timeout_seconds) {
   if (command_.find("{in}") == std::string::npos ||
       command_.find("{out}") == std::string::npos) {
     throw Error("prior command", "template", "\"" + command_ + "\"",
@@ -413,8 +422,7 @@ PriorResult CommandPrior::Fill(const PriorClip& clip) {
     line = ReplaceAll(line, "{out}", ShellQuote(out.string()));
     PANO4D_LOG(kInfo) << "prior command for clip " << clip.name << ": " << line;
     // The newline ends a trailing '#' comment in the template.
-    problem = RunShell(
-        "( " + line + "\n) > " + ShellQuote(log.string()) + " 2>&1", log);
+    problem = RunShell("( " + line + "\n)", log, timeout_seconds_);
   } catch (const Error& e) {
     problem = std::string("cannot prepare its input: ") + e.what();
   }
@@ -464,10 +472,12 @@ cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,
 }
 
 std::unique_ptr<Prior> MakePrior(const std::string& command,
-                                 const std::filesystem::path& work_dir) {
+                                 const std::filesystem::path& work_dir,
+                                 double timeout_seconds) {
   if (command.empty()) return std::make_unique<GeometryPrior>();
   return std::make_unique<CommandPrior>(command, work_dir,
-                                        std::make_unique<GeometryPrior>());
+                                        std::make_unique<GeometryPrior>(),
+                                        timeout_seconds);
 }
 
 }  // namespace pano4d

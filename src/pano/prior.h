@@ -71,6 +71,12 @@ class GeometryPrior : public Prior {
   PriorResult Fill(const PriorClip& clip) override;
 };
 
+// The time one clip may take in a prior command (--prior-timeout): video
+// diffusion models on a GPU take a few minutes for a clip of tens of
+// frames; half an hour leaves room for a slow GPU or a first run that
+// loads its weights, and still ends a command that hangs.
+inline constexpr double kPriorTimeoutSeconds = 1800.0;
+
 // The external-command plug-in for video diffusion models. `command` holds
 // {in} and {out}, replaced by folder paths (shell-quoted). {in} gets:
 //   frames/00000.png ...     the warped frames (8-bit RGB PNG)
@@ -80,13 +86,17 @@ class GeometryPrior : public Prior {
 //                            CameraToJson), reference_cameras, clip name
 // The command must write {out}/frames/00000.png ... : the same count and
 // size, 8 or 16-bit RGB. Anything else (a non-zero exit, a missing, extra-
-// short or wrongly sized frame, a file that does not decode) is logged as an
-// error naming the command and the problem, and `fallback` fills the clip
-// instead (result.note says why); the work folder is kept for inspection.
+// short or wrongly sized frame, a file that does not decode, a command
+// still running after `timeout_seconds`, which is then stopped with all it
+// started) is logged as an error naming the command and the problem, and
+// `fallback` fills the clip instead (result.note says why); the work folder
+// is kept for inspection. The command runs in its own process group:
+// Ctrl-C stops it and then pano4d (src/core/subprocess.h).
 class CommandPrior : public Prior {
  public:
   CommandPrior(std::string command, std::filesystem::path work_dir,
-               std::unique_ptr<Prior> fallback);
+               std::unique_ptr<Prior> fallback,
+               double timeout_seconds = kPriorTimeoutSeconds);
   std::string name() const override { return "command"; }
   PriorResult Fill(const PriorClip& clip) override;
 
@@ -94,13 +104,15 @@ class CommandPrior : public Prior {
   std::string command_;
   std::filesystem::path work_dir_;
   std::unique_ptr<Prior> fallback_;
+  double timeout_seconds_;
 };
 
 // The prior the expansion fills holes with: the external command when given
 // (its work folders under `work_dir`), falling back to the CPU geometry
 // prior when it fails; the CPU prior alone when `command` is empty.
-std::unique_ptr<Prior> MakePrior(const std::string& command,
-                                 const std::filesystem::path& work_dir);
+std::unique_ptr<Prior> MakePrior(
+    const std::string& command, const std::filesystem::path& work_dir,
+    double timeout_seconds = kPriorTimeoutSeconds);
 
 // V_refined = M * filled + (1 - M) * warped, per frame (M: 255 = filled).
 cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,

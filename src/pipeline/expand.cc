@@ -55,7 +55,7 @@ ExpandSummary RunExpand(const Workspace& ws, const ExpandOptions& options) {
   const std::unique_ptr<Trainer> owned = MakeFitTrainer(
       ReadCheckpointScene(ckpt), LoadTrainingViews(frames.train), o);
   Trainer& trainer = *owned;
-  const std::unique_ptr<Prior> prior = MakePrior(o.prior_cmd, out / "prior");
+  const std::unique_ptr<Prior> prior = MakePrior(o.prior_cmd, out / "prior", o.prior_timeout);
   Expansion expansion(o.expansion, o.seed, out, prior.get());
   if (e > 1 && fs::exists(expansion.StepDir(e - 1) / "cameras.json")) {
     expansion.Reload(trainer, e - 1);  // chaining from the step before

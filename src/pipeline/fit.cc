@@ -134,7 +134,7 @@ ExpansionState StartExpansion(const Workspace& ws, const FitOptions& o,
   }
   const fs::path dir = ws.expansion();
   EnsureDirectory(dir);
-  ex.prior = MakePrior(o.prior_cmd, dir / "prior");
+  ex.prior = MakePrior(o.prior_cmd, dir / "prior", o.prior_timeout);
   ex.expansion =
       std::make_unique<Expansion>(o.expansion, o.seed, dir, ex.prior.get());
   if (resuming) {

@@ -1,6 +1,7 @@
 #include "src/pipeline/fit_options.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "src/core/error.h"
 #include "src/core/frames.h"
@@ -12,6 +13,10 @@ void FitOptions::Check() const {
     throw Error("--time-budget", "", std::to_string(time_budget),
                 "a wall-clock budget makes the end depend on the machine; it "
                 "cannot be combined with --deterministic");
+  }
+  if (!(prior_timeout > 0) || !std::isfinite(prior_timeout)) {
+    throw Error("--prior-timeout", "", std::to_string(prior_timeout),
+                "must be a positive number of seconds");
   }
   if (!(time_budget >= 0)) {
     throw Error("--time-budget", "", std::to_string(time_budget),
@@ -62,6 +67,7 @@ nlohmann::json FitOptions::ToJson() const {
           {"expand", expand},
           {"expansion", expansion_json},
           {"prior_cmd", prior_cmd},
+          {"prior_timeout", prior_timeout},
           {"panorama_width", panorama_width},
           {"iterations", optional(iterations)},
           {"depth_weight", optional(depth_weight)},
@@ -105,7 +111,7 @@ nlohmann::json ResumeFingerprint(const FitOptions& used) {
   nlohmann::json j = used.ToJson();
   for (const char* conduct :
        {"resume", "deterministic", "checkpoint_every", "validate_every",
-        "log_every", "time_budget", "panorama_width"})
+        "log_every", "time_budget", "panorama_width", "prior_timeout"})
     j.erase(conduct);
   // Held in trainer, init and expansion as used.
   j.erase("iterations");

@@ -17,6 +17,7 @@
 #include "src/gs/init.h"
 #include "src/gs/trainer.h"
 #include "src/pano/expansion.h"
+#include "src/pano/prior.h"
 
 namespace pano4d {
 
@@ -33,6 +34,9 @@ struct FitOptions {
   // The video prior that fills the expansion's holes: a command with {in}
   // and {out} (README, "A video prior"); empty: the CPU geometry prior.
   std::string prior_cmd;
+  // Seconds one clip may take in the prior command before it is stopped
+  // and the CPU prior fills the clip (src/pano/prior.h).
+  double prior_timeout = kPriorTimeoutSeconds;
   // Width of the equirectangular panoramas in WS/pano4d/panorama (height
   // half of it).
   int panorama_width = 1024;

@@ -318,6 +318,63 @@ TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
             10);
 }
 
+// Ctrl-C while the prior command runs: the command's process group is
+// stopped and pano4d ends with the signal within a second; the checkpoint
+// resumes, and a prior that sleeps past --prior-timeout is stopped and the
+// CPU prior fills in.
+TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
+  const fs::path ws = Workspace("ws_interrupt");
+  const std::vector<std::string> options = {
+      "--iterations",      "40", "--checkpoint-every", "10",
+      "--expand-every",    "20", "--expansion-steps",  "1",
+      "--directions",      "1",  "--expansion-stride", "4",
+      "--panorama-width",  "64", "--prior-cmd",        "sleep 60 # {in} {out}"};
+  std::vector<std::string> args = {"fit", "--workspace", ws.string()};
+  args.insert(args.end(), options.begin(), options.end());
+  const pid_t pid = Spawn(args, ws / "fit1.log");
+  ASSERT_GT(pid, 0);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (Slurp(ws / "fit1.log").find("prior command for clip") ==
+             std::string::npos &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(Slurp(ws / "fit1.log").find("prior command for clip"),
+            std::string::npos)
+      << Slurp(ws / "fit1.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // sleeping
+  const auto sent = std::chrono::steady_clock::now();
+  kill(pid, SIGINT);
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) == 0 &&
+         std::chrono::steady_clock::now() - sent < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const double seconds = std::chrono::duration<double>(
+                             std::chrono::steady_clock::now() - sent)
+                             .count();
+  EXPECT_LT(seconds, 1.0) << Slurp(ws / "fit1.log");
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT)
+      << "status " << status << "\n"
+      << Slurp(ws / "fit1.log");
+  EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+
+  std::string resume = "fit --workspace '" + ws.string() + "' --resume";
+  for (const std::string& o : options)
+    resume += " '" + o + "'";
+  resume += " --prior-timeout 1";
+  ASSERT_EQ(RunPano4d(resume, ws / "fit2.log"), 0) << Slurp(ws / "fit2.log");
+  const std::string log = Slurp(ws / "fit2.log");
+  EXPECT_NE(log.find("resumed from"), std::string::npos) << log;
+  EXPECT_NE(log.find("stopped at its time limit of 1 s"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("falling back to the geometry prior"), std::string::npos)
+      << log;
+  EXPECT_EQ(nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"))
+                .at("iterations")
+                .get<int>(),
+            40);
+}
+
 // A checkpoint copied from another scene whose frames have the same names,
 // and one with a flipped bit: --resume refuses both by name, and the
 // workspace's own checkpoint still resumes.

@@ -2,8 +2,10 @@
 
 #include "src/pano/warp.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <random>
 #include <sstream>
@@ -497,6 +499,39 @@ TEST(CommandPriorTest, WithoutAFallbackAFailureIsAnError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("status 3"), std::string::npos)
         << e.what();
+  }
+}
+
+// A command that hangs (here a shell that starts a sleep in the background
+// and waits for it) is stopped at its time limit with everything it
+// started, and the CPU prior fills the clip.
+TEST(CommandPriorTest, AHangingCommandIsStoppedAtItsTimeLimitWithItsChildren) {
+  testing::TempDir dir;
+  const fs::path pid_file = dir / "sleep.pid";
+  CommandPrior prior("sleep 60 & echo $! > '" + pid_file.string() +
+                         "'; wait # {in} {out}",
+                     dir / "work", std::make_unique<GeometryPrior>(),
+                     /*timeout_seconds=*/0.5);
+  const auto start = std::chrono::steady_clock::now();
+  const PriorResult result = prior.Fill(HoleClip());
+  const double seconds = std::chrono::duration<double>(
+                             std::chrono::steady_clock::now() - start)
+                             .count();
+  EXPECT_EQ(result.prior, "geometry");
+  EXPECT_NE(result.note.find("stopped at its time limit of 0.5 s"),
+            std::string::npos)
+      << result.note;
+  EXPECT_LT(seconds, 10.0);  // the limit is what ended it, not the sleep
+  // The sleep the shell started went with it.
+  std::ifstream in(pid_file);
+  pid_t sleeper = 0;
+  ASSERT_TRUE(in >> sleeper);
+  // Gone, or a zombie that nobody has reaped yet (a container's init may
+  // take its time): either way no longer running.
+  std::ifstream stat("/proc/" + std::to_string(sleeper) + "/stat");
+  std::string pid, name, state;
+  if (stat >> pid >> name >> state) {
+    EXPECT_EQ(state, "Z") << "pid " << sleeper << " still runs";
   }
 }
 
