@@ -387,6 +387,13 @@ void Trainer::Restore(const CheckpointFile& file) {
   read("densify.gradient", &grad_accum_);
   read("densify.count", &counts);
   read("densify.radius", &max_radius_);
+  // Visits counted since the last densification: whole, at most one a step.
+  for (float c : counts) {
+    if (!(c >= 0 && c <= static_cast<float>(iteration) && c == std::floor(c)))
+      throw Error(source, "densify.count", std::to_string(c),
+                  "not a count of steps in 0.." + std::to_string(iteration) +
+                      " (corrupt checkpoint)");
+  }
   grad_count_.assign(counts.begin(), counts.end());
   if (grad_accum_.size() != scene_.size() || counts.size() != scene_.size() ||
       max_radius_.size() != scene_.size()) {
