@@ -72,7 +72,7 @@ void CheckCameras(const ColmapModel& model, const std::string& source) {
 }  // namespace
 
 Rigid3d ColmapImage::CamFromWorld(const std::string& source) const {
-  if (!qvec.allFinite() || !(qvec.norm() > 0)) {
+  if (!qvec.allFinite() || !(qvec.cwiseAbs().maxCoeff() > 0)) {
     throw Error(source, "image " + Id(image_id) + " qvec", QvecText(qvec),
                 "must be a finite, non-zero quaternion");
   }
@@ -358,6 +358,17 @@ ColmapModel ReadModel(const std::filesystem::path& dir) {
     ReadPoints3DText(model, dir / "points3D.txt");
   }
   model.BuildIndex();
+  // Repeated ids and references to missing cameras, points or images: said
+  // once, as a warning, since pano4d reads each image's pose and the 3D
+  // points as they are (and ToCamera still refuses a missing camera).
+  try {
+    model.Check(dir.string());
+  } catch (const Error& e) {
+    PANO4D_LOG(kWarning) << e.what()
+                         << " (the model is used as it is; COLMAP's "
+                            "model_converter or a fresh `pano4d sfm` writes a "
+                            "consistent one)";
+  }
 
   // COLMAP 3.12+ adds rigs and frames; its images files still hold each
   // image's cam_from_world, which is all pano4d uses.

@@ -52,6 +52,14 @@ NpyArray LoadArray(const std::filesystem::path& dir, const std::string& name,
     throw Error(path.string(), "shape", shape + " " + array.descr(),
                 "unexpected for " + name);
   }
+  for (const float v : array.ToFloats()) {
+    if (!std::isfinite(v)) {
+      throw Error(path.string(), "values", std::to_string(v),
+                  "LPIPS weights must be finite (a damaged conversion?); "
+                  "make the folder again with "
+                  "scripts/lpips_weights_from_torch.py");
+    }
+  }
   return array;
 }
 
@@ -245,15 +253,26 @@ cv::Mat Lpips::Map(const cv::Mat& a, const cv::Mat& b) const {
 
 std::optional<double> Lpips::Score(const cv::Mat& a, const cv::Mat& b,
                                    const cv::Mat& mask) const {
-  if (mask.empty()) return cv::mean(Map(a, b))[0];
-  const double weight = cv::sum(mask)[0];
-  if (weight == 0) return std::nullopt;
-  cv::Mat mask3, masked_a, masked_b;
-  cv::merge(std::vector<cv::Mat>{mask, mask, mask}, mask3);
-  cv::multiply(a, mask3, masked_a);
-  cv::multiply(b, mask3, masked_b);
-  const cv::Mat map = Map(masked_a, masked_b);
-  return cv::sum(map.mul(mask))[0] / std::max(weight, kMaskedMeanEps);
+  double value = 0;
+  if (mask.empty()) {
+    value = cv::mean(Map(a, b))[0];
+  } else {
+    const double weight = cv::sum(mask)[0];
+    if (weight == 0) return std::nullopt;
+    cv::Mat mask3, masked_a, masked_b;
+    cv::merge(std::vector<cv::Mat>{mask, mask, mask}, mask3);
+    cv::multiply(a, mask3, masked_a);
+    cv::multiply(b, mask3, masked_b);
+    const cv::Mat map = Map(masked_a, masked_b);
+    value = cv::sum(map.mul(mask))[0] / std::max(weight, kMaskedMeanEps);
+  }
+  // A number in a report must be one: non-finite input pixels or a network
+  // that overflows end here, not as -inf in a CSV.
+  if (!std::isfinite(value)) {
+    throw Error("lpips", "score", std::to_string(value),
+                "not finite (are the images finite?)");
+  }
+  return value;
 }
 
 }  // namespace pano4d

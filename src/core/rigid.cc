@@ -23,14 +23,16 @@ std::string VectorText(const Eigen::VectorXd& v) {
 
 Rigid3d Rigid3d::FromColmap(const Eigen::Vector4d& qvec,
                             const Eigen::Vector3d& tvec) {
-  const double norm = qvec.norm();
-  if (!qvec.allFinite() || !(norm > 0)) {
+  // Scaled by its largest entry first: the norm of (1e300, 0, 0, 0)
+  // overflows to inf, and dividing by it would give the zero quaternion.
+  const double largest = qvec.cwiseAbs().maxCoeff();
+  if (!qvec.allFinite() || !(largest > 0)) {
     throw Error("pose", "qvec", VectorText(qvec),
                 "must be a finite, non-zero quaternion");
   }
   if (!tvec.allFinite())
     throw Error("pose", "tvec", VectorText(tvec), "must be finite");
-  const Eigen::Vector4d q = qvec / norm;
+  const Eigen::Vector4d q = (qvec / largest).normalized();
   return Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)), tvec);
 }
 

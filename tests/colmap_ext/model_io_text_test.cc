@@ -1,5 +1,6 @@
 #include "colmap_ext/model_io_text.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -9,6 +10,8 @@
 #include "colmap_ext/model.h"
 #include "colmap_ext/model_io_binary.h"
 #include "src/core/error.h"
+#include "src/core/log.h"
+#include "tests/support/test_files.h"
 
 namespace pano4d {
 namespace {
@@ -342,6 +345,32 @@ TEST(ModelIoTextTest, RefusesNamesItCouldNotReadBack) {
   EXPECT_THROW(WriteImagesText(model, out), Error);
   model.images[2].name = "";
   EXPECT_NO_THROW(WriteImagesText(model, out));
+}
+
+// A model with a repeated image id, or a point2D that names a missing 3D
+// point, is read with one warning that names the folder and the id.
+TEST(ModelIoTextTest, RepeatedIdsAndDanglingReferencesAreSaidOnce) {
+  for (const bool repeat : {true, false}) {
+    ColmapModel model = BuildModel();
+    if (repeat) {
+      model.images[3].image_id = model.images[2].image_id;
+    } else {
+      model.images[1].points2D.push_back({{1.0, 2.0}, 424242});
+    }
+    testing::TempDir dir;
+    WriteModel(model, dir.path(), ColmapFormat::kText);
+    std::ostringstream log;
+    SetLogSink(&log);
+    const ColmapModel read = ReadModel(dir.path());
+    SetLogSink(nullptr);
+    const std::string text = log.str();
+    const std::string what =
+        repeat ? "image id appears more than once" : "no 3D point has this id";
+    EXPECT_NE(text.find(what), std::string::npos) << text;
+    EXPECT_NE(text.find(dir.path().string()), std::string::npos) << text;
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+    EXPECT_EQ(read.images.size(), model.images.size());
+  }
 }
 
 TEST(ModelIoTextTest, TruncationNeverCrashes) {

@@ -1,5 +1,6 @@
 #include "src/core/rigid.h"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -28,6 +29,17 @@ TEST(RigidTest, ColmapQvecIsWxyzWorldToCamera) {
   // Unnormalized input is normalized.
   const Rigid3d scaled = Rigid3d::FromColmap({2 * s, 0, 0, 2 * s}, {1, 2, 3});
   EXPECT_LT((scaled.ColmapQvec() - Eigen::Vector4d(s, 0, 0, s)).norm(), 1e-15);
+}
+
+// A quaternion whose norm overflows is still a rotation, not the zero
+// quaternion.
+TEST(RigidTest, AHugeQvecIsNormalisedWithoutOverflow) {
+  const Rigid3d r = Rigid3d::FromColmap({1e300, 0, 0, 1e300}, {0, 0, 0});
+  EXPECT_NEAR(r.rotation.norm(), 1.0, 1e-12);
+  EXPECT_NEAR(r.rotation.w(), std::sqrt(0.5), 1e-12);
+  EXPECT_THROW(Rigid3d::FromColmap({0, 0, 0, 0}, {0, 0, 0}), Error);
+  EXPECT_THROW(Rigid3d::FromColmap({1e308, 1e308, 0, HUGE_VAL}, {0, 0, 0}),
+               Error);
 }
 
 TEST(RigidTest, CameraCentreMapsToTheOrigin) {

@@ -1,5 +1,7 @@
 #include "evaluation/lpips.h"
 
+#include <limits>
+
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
@@ -84,6 +86,34 @@ TEST(LpipsTest, MissingOrMisShapedWeightsNameTheFile) {
   WriteNpy(dir / "lin3.weight.npy",
            NpyArray::FromFloats({1, 5, 1, 1}, {1, 1, 1, 1, 1}));
   EXPECT_THROW(Lpips::Load(dir.path()), Error);
+}
+
+// A NaN-filled network is refused at load, naming the file; a NaN image
+// gives an error, not -inf in a report.
+TEST(LpipsTest, NonFiniteWeightsOrScoresAreErrors) {
+  testing::TempDir dir;
+  for (const auto& entry : std::filesystem::directory_iterator(kFixture)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("conv", 0) == 0 || name.rfind("lin", 0) == 0)
+      std::filesystem::copy(entry.path(), dir / name);
+  }
+  const Lpips lpips = Lpips::Load(dir.path());
+  cv::Mat a(16, 16, CV_64FC3, cv::Scalar(0.5, 0.4, 0.3));
+  cv::Mat b = a.clone();
+  b.at<cv::Vec3d>(3, 4)[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(lpips.Score(a, b), Error);
+
+  NpyArray lin = ReadNpy(dir / "lin2.weight.npy");
+  std::vector<float> nan(lin.ToFloats().size(),
+                         std::numeric_limits<float>::quiet_NaN());
+  WriteNpy(dir / "lin2.weight.npy", NpyArray::FromFloats(lin.shape, nan));
+  try {
+    Lpips::Load(dir.path());
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), (dir / "lin2.weight.npy").string());
+    EXPECT_NE(std::string(e.what()).find("finite"), std::string::npos);
+  }
 }
 
 }  // namespace
