@@ -37,6 +37,13 @@ cv::Mat ReadDepthMap(const fs::path& path) {
   m.forEach<float>([](float& d, const int*) {
     if (!std::isfinite(d) || d < 0) d = 0;
   });
+  double largest = 0;
+  cv::minMaxLoc(m, nullptr, &largest);
+  if (largest > kMaxPlausibleDepth) {
+    throw Error(path.string(), "depth", std::to_string(largest),
+                "beyond any scene: expected z-depth in the scene's units "
+                "(metres, or a dataset's own), 0 where none");
+  }
   return m;
 }
 

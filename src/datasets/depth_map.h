@@ -18,6 +18,12 @@ namespace pano4d {
 // is none of these.
 cv::Mat ReadDepthMap(const std::filesystem::path& path);
 
+// The largest depth a map may hold: a million scene units (1000 km in
+// metres) is no capture; such values are a broken conversion (1e30 from a
+// float bit pattern), which would otherwise reach the initialisation's
+// k-means as an OpenCV error. ReadDepthMap refuses them, naming the file.
+inline constexpr double kMaxPlausibleDepth = 1e6;
+
 // A dataset frame's z-depth (its file by the dataset's convention), of its
 // camera's size. Throws pano4d::Error naming the file when the size differs.
 cv::Mat ReadDepth(const DatasetFrame& frame);

@@ -27,6 +27,17 @@ namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
 
+// Throws an Error naming `file` when `image` is not the camera's size.
+void CheckSize(const cv::Mat& image, const fs::path& file,
+               const Camera& camera) {
+  if (image.cols == camera.width && image.rows == camera.height) return;
+  throw Error(file.string(), "size",
+              std::to_string(image.cols) + "x" + std::to_string(image.rows),
+              "differs from its frame's camera (" +
+                  std::to_string(camera.width) + "x" +
+                  std::to_string(camera.height) + ")");
+}
+
 // Dynamic masks for frames that have none on disk: flow and epipolar
 // geometry over each camera's frames in time order (motion_segmentation.h).
 void ComputeMissingMasks(const fs::path& dir,
@@ -45,6 +56,7 @@ void ComputeMissingMasks(const fs::path& dir,
     std::vector<std::string> names;
     for (WorkspaceFrame* f : list) {
       images.push_back(ReadImage(f->rgb).mat());
+      CheckSize(images.back(), f->rgb, f->camera.camera);
       names.push_back(f->name + ".png");
     }
     DynamicMaskStats stats;
@@ -82,7 +94,14 @@ WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o,
     WorkspaceFrame f = FrameOf(d);
     if (copy_depth) {
       f.depth = ws.depth_map(f.name);
-      WriteDepthMap(f.depth, ReadDepth(d));
+      const cv::Mat depth = ReadDepth(d);
+      if (cv::countNonZero(depth) == 0) {
+        PANO4D_LOG(kWarning)
+            << d.depth.string()
+            << ": no valid depth (every pixel NaN, negative or 0); the "
+               "frame gets no depth loss";
+      }
+      WriteDepthMap(f.depth, depth);
     }
     // The synthetic generator's ground-truth dynamic masks, when present.
     const fs::path gt_mask = o.dataset / "dynamic" /
@@ -96,6 +115,9 @@ WorkspaceFrames FramesFromDataset(const Workspace& ws, const DepthOptions& o,
   for (const DatasetFrame& d : ds.val) {
     WorkspaceFrame f = FrameOf(d);
     f.covisible = d.covisible;
+    // Read now, not at the fit's first validation.
+    if (!f.covisible.empty())
+      CheckSize(ReadMask(f.covisible), f.covisible, d.camera.camera);
     frames.val.push_back(std::move(f));
   }
   return frames;
@@ -271,6 +293,7 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
     const WorkspaceFrame& f = frames->train[i];
     const Image image = ReadImage(f.rgb);
     const int w = f.camera.camera.width, h = f.camera.camera.height;
+    CheckSize(image.mat(), f.rgb, f.camera.camera);
     const double s = std::min(1.0, double(o.stereo_long_side) / std::max(w, h));
     const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
     const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
@@ -280,7 +303,10 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
     views[i].grey = small;
     views[i].camera = f.camera;
     views[i].camera.camera = f.camera.camera.Rescaled(sw, sh);
-    if (!f.dynamic_mask.empty()) dynamic[i] = ReadMask(f.dynamic_mask);
+    if (!f.dynamic_mask.empty()) {
+      dynamic[i] = ReadMask(f.dynamic_mask);
+      CheckSize(dynamic[i], f.dynamic_mask, f.camera.camera);
+    }
   }
 
   nlohmann::json report = nlohmann::json::array();

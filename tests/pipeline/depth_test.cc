@@ -5,7 +5,9 @@
 #include "src/pipeline/depth.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,8 @@
 
 #include "colmap_ext/model.h"
 #include "src/core/error.h"
+#include "src/core/image.h"
+#include "src/core/log.h"
 #include "src/core/json.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/depth_map.h"
@@ -187,6 +191,65 @@ TEST_F(DepthStageTest, ADatasetWithoutDepthGetsStereoOnItsCameras) {
     EXPECT_NE(std::string(e.what()).find("--factor"), std::string::npos)
         << e.what();
   }
+}
+
+// The source of the Error `run` throws ("" when none).
+template <typename Run>
+std::string ErrorSource(Run run) {
+  try {
+    run();
+  } catch (const Error& e) {
+    return e.source();
+  }
+  return "";
+}
+
+// Bad dataset files are named by the depth stage, before any fit: a
+// covisible mask of another size, a depth map of 1e30 (a broken
+// conversion); a map with no valid pixel is a warning.
+TEST_F(DepthStageTest, BadDatasetFilesAreNamedBeforeTheFit) {
+  const fs::path data = dir_->path() / "bad_files";
+  fs::copy(dir_->path() / "tiny", data, fs::copy_options::recursive);
+  const Workspace ws(dir_->path() / "bad_files_ws");
+  DepthOptions o;
+  o.dataset = data;
+  const Dataset d = LoadDataset(data, 2);
+
+  const fs::path mask = d.val[3].covisible;
+  ASSERT_FALSE(mask.empty());
+  const cv::Mat good_mask = ReadMask(mask);
+  WriteMask(mask, cv::Mat(good_mask.rows / 2, good_mask.cols / 2, CV_8UC1,
+                          cv::Scalar(255)));
+  EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), mask.string());
+  WriteMask(mask, good_mask);
+
+  const fs::path depth = d.train[2].depth;
+  const cv::Mat good_depth = ReadDepthMap(depth);
+  WriteDepthMap(depth, cv::Mat(good_depth.size(), CV_32F, cv::Scalar(1e30)));
+  EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), depth.string());
+
+  WriteDepthMap(depth, cv::Mat(good_depth.size(), CV_32F,
+                               cv::Scalar(std::nanf(""))));
+  std::ostringstream log;
+  SetLogSink(&log);
+  EXPECT_NO_THROW(RunDepth(ws, o));
+  SetLogSink(nullptr);
+  EXPECT_NE(log.str().find(depth.string() + ": no valid depth"),
+            std::string::npos)
+      << log.str();
+}
+
+// A COLMAP model whose cameras disagree with its images: stereo names the
+// image instead of failing inside OpenCV.
+TEST_F(DepthStageTest, AnImageOfAnotherSizeThanItsCameraIsNamed) {
+  const Workspace ws = ColmapWorkspace("wrong_image_size");
+  const fs::path image = ws.images() / "0_00001.png";
+  const cv::Mat bgr = ReadImage(image).ToBgr8();
+  cv::Mat half;
+  cv::resize(bgr, half, cv::Size(bgr.cols / 2, bgr.rows / 2));
+  WritePng8(image, half);
+  DepthOptions o;
+  EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), image.string());
 }
 
 TEST_F(DepthStageTest, BadOptionsAreRefusedBeforeAnyWork) {
