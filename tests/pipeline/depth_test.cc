@@ -5,6 +5,7 @@
 #include "src/pipeline/depth.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -250,6 +251,32 @@ TEST_F(DepthStageTest, AnImageOfAnotherSizeThanItsCameraIsNamed) {
   WritePng8(image, half);
   DepthOptions o;
   EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), image.string());
+}
+
+// The stamp `run` reuses the stage by: written on completion, stale once
+// an image of the COLMAP workspace (or the model) changes, as when
+// `run --colmap` is given a workspace whose frames were replaced.
+TEST_F(DepthStageTest, ItsStampNoticesAChangedImageOrModel) {
+  const Workspace ws = ColmapWorkspace("stamped");
+  DepthOptions o;
+  const StageStamp stamp(ws, "depth");
+  EXPECT_TRUE(stamp.StaleReason(DepthStageInputs(ws, o)).has_value());
+  RunDepth(ws, o);
+  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)), std::nullopt);
+  const fs::path image = ws.images() / "0_00001.png";
+  fs::last_write_time(image,
+                      fs::last_write_time(image) + std::chrono::seconds(5));
+  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)).value_or(""),
+            "images/0_00001.png changed");
+  RunDepth(ws, o);
+  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)), std::nullopt);
+  fs::remove(ws.sparse() / "0" / "points3D.bin");
+  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)).value_or(""),
+            "sparse/0/points3D.bin is gone");
+  o.holdout = o.holdout + 1;
+  EXPECT_NE(stamp.StaleReason(DepthStageInputs(ws, o)).value_or("").find(
+                "option depth.holdout"),
+            std::string::npos);
 }
 
 TEST_F(DepthStageTest, BadOptionsAreRefusedBeforeAnyWork) {
