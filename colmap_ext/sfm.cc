@@ -590,7 +590,12 @@ SfmReport RunSfm(const SfmOptions& o) {
       {"dynamic_masks", o.dynamic_masks},
       {"mean_dynamic_fraction", report.mean_dynamic_fraction},
       {"options", o.ToJson()}};
-  WriteFileAtomically(workspace.sfm_json(), summary.dump(2) + "\n");
+  // Rewritten only when it says something new: the depth stage's stamp
+  // records its modification time.
+  const std::string text = summary.dump(2) + "\n";
+  if (!fs::exists(workspace.sfm_json()) ||
+      ReadTextFile(workspace.sfm_json()) != text)
+    WriteFileAtomically(workspace.sfm_json(), text);
   WriteFileAtomically(logs / "timings.json", timings.dump(2) + "\n");
   return report;
 }
