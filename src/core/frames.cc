@@ -71,6 +71,16 @@ void WorkspaceFrames::Check(const std::string& source) const {
   if (train.empty()) {
     throw Error(source, "train", "[]", "no training frames");
   }
+  // Every time is some frame's (datasets number their times densely):
+  // more times than frames would have the motion model hold a pose for
+  // times no frame shows.
+  const std::size_t frames = train.size() + val.size();
+  if (num_times < 1 || static_cast<std::size_t>(num_times) > frames) {
+    throw Error(source, "num_times", std::to_string(num_times),
+                "expected 1.." + std::to_string(frames) +
+                    " (one time per frame at most); `pano4d depth` again "
+                    "writes it from the dataset");
+  }
   std::set<std::string> names;
   for (const auto* split : {&train, &val}) {
     for (const WorkspaceFrame& f : *split) {

@@ -47,7 +47,8 @@ struct WorkspaceFrames {
   std::vector<WorkspaceFrame> val;  // held-out frames; may be empty
 
   // Throws pano4d::Error naming `source` and the frame: duplicate names,
-  // times outside [0, num_times), non-pinhole cameras, no training frame.
+  // times outside [0, num_times), num_times beyond the frame count,
+  // non-pinhole cameras, no training frame.
   void Check(const std::string& source) const;
 };
 

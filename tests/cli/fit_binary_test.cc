@@ -418,6 +418,25 @@ TEST_F(FitBinaryTest, ResumeRefusesAnotherScenesOrACorruptCheckpoint) {
   const auto [rc_flip, log_flip] = resume(flipped);
   EXPECT_EQ(rc_flip, 1) << log_flip;
   EXPECT_NE(log_flip.find("checksum"), std::string::npos) << log_flip;
+  // Options that shape the model, given on resume, are refused by name
+  // (before, --num-bases, --sh-degree and --no-motion were ignored).
+  for (const auto& [flag, field] :
+       std::vector<std::pair<std::string, std::string>>{
+           {" --num-bases 3", "init.num_bases"},
+           {" --no-motion", "init.num_bases"},
+           {" --sh-degree 1", "init.sh_degree"}}) {
+    {
+      std::ofstream out(ckpt, std::ios::binary | std::ios::trunc);
+      out << own;
+    }
+    EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() + "' --resume" +
+                            fit + flag,
+                        ws / "r.log"),
+              1)
+        << flag;
+    EXPECT_NE(Slurp(ws / "r.log").find("option " + field), std::string::npos)
+        << Slurp(ws / "r.log");
+  }
   const auto [rc_own, log_own] = resume(own);
   EXPECT_EQ(rc_own, 0) << log_own;
   EXPECT_NE(log_own.find("resumed from"), std::string::npos) << log_own;
