@@ -120,6 +120,12 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
                          const fs::path& log, const ProcessOptions& options) {
   if (argv_strings.empty())
     throw Error("RunProcess", "argv", "", "no executable given");
+  if (options.timeout_seconds > 0 && !options.own_group) {
+    throw Error("RunProcess", "timeout_seconds",
+                std::to_string(options.timeout_seconds),
+                "a time limit stops the child's own process group: set "
+                "own_group");
+  }
   EnsureDirectory(log.parent_path());
   {
     std::ofstream header(log, std::ios::trunc);
