@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -352,6 +353,7 @@ TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
   const double seconds = std::chrono::duration<double>(
                              std::chrono::steady_clock::now() - sent)
                              .count();
+  std::printf("SIGINT to exit: %.3f s\n", seconds);
   EXPECT_LT(seconds, 1.0) << Slurp(ws / "fit1.log");
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT)
       << "status " << status << "\n"
