@@ -266,6 +266,13 @@ Json ReadCheckpointFingerprint(const fs::path& path) {
   return ReadCheckpointFingerprint(ReadFileBytes(path), path.string());
 }
 
+std::string ReadCheckpointSceneFingerprint(const fs::path& path) {
+  return WithHeaderErrors(path.string(), [&] {
+    const CheckpointFile file(ReadFileBytes(path), path.string());
+    return file.header.value("scene", std::string());
+  });
+}
+
 GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
                                   const std::string& source) {
   return WithHeaderErrors(source, [&] {

@@ -170,6 +170,9 @@ GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
 nlohmann::json ReadCheckpointFingerprint(const std::filesystem::path& path);
 nlohmann::json ReadCheckpointFingerprint(std::vector<std::uint8_t> bytes,
                                          const std::string& source);
+// The scene a checkpoint was written for (ViewsFingerprint); empty for a
+// checkpoint from before pano4d stored one.
+std::string ReadCheckpointSceneFingerprint(const std::filesystem::path& path);
 
 // The scene the views show, as a checkpoint records it: a hash of their
 // names, times, cameras, images, depth and dynamic masks.

@@ -401,11 +401,17 @@ std::string DepthSummary::BriefReport() const {
 
 StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
   StageInputs in(ws.root());
-  in.Option("depth", o.ToJson());
+  // The options as they act: the protocol's factor resolved, paths however
+  // they were spelt (`data/` and `/abs/data` are one input).
+  DepthOptions as_used = o;
   if (!o.dataset.empty()) {
-    in.Option("dataset", fs::weakly_canonical(o.dataset).string());
-    in.File(o.dataset);
+    as_used.factor = LoadDataset(o.dataset, o.factor).factor;
+    as_used.dataset = fs::weakly_canonical(o.dataset);
   }
+  if (!o.depth_dir.empty())
+    as_used.depth_dir = fs::weakly_canonical(o.depth_dir);
+  in.Option("depth", as_used.ToJson());
+  if (!o.dataset.empty()) in.File(o.dataset);
   // The model of `pano4d sfm` (or an adopted COLMAP workspace), whose
   // frames or sparse points the stage reads.
   in.File(ws.sfm_json());

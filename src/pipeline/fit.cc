@@ -323,8 +323,9 @@ std::filesystem::path BackUpPreviousFit(const Workspace& ws) {
   return backup;
 }
 
-std::optional<std::string> CheckpointMismatch(const Workspace& ws,
-                                              const FitOptions& used) {
+std::optional<std::string> CheckpointMismatch(
+    const Workspace& ws, const FitOptions& used,
+    const std::vector<TrainingView>& views) {
   if (!fs::exists(ws.checkpoint())) return "no checkpoint";
   const nlohmann::json saved = ReadCheckpointFingerprint(ws.checkpoint());
   if (saved.is_null()) return "the checkpoint records no options";
@@ -333,6 +334,9 @@ std::optional<std::string> CheckpointMismatch(const Workspace& ws,
     return "option " + d->path + " was " + JsonValueForMessage(d->first) +
            ", now " + JsonValueForMessage(d->second);
   }
+  if (ReadCheckpointSceneFingerprint(ws.checkpoint()) !=
+      ViewsFingerprint(views))
+    return "the checkpoint was written for other frames";
   return std::nullopt;
 }
 

@@ -108,8 +108,10 @@ FitSummary RunFit(const Workspace& workspace, const FitOptions& options);
 std::filesystem::path BackUpPreviousFit(const Workspace& workspace);
 
 // Whether WS/pano4d/checkpoints/fit.ckpt was written by a fit with these
-// (used) options: the reason it was not, or nothing when it was.
-std::optional<std::string> CheckpointMismatch(const Workspace& workspace,
-                                              const FitOptions& used);
+// (used) options on the frames `views` (ViewsFingerprint): the reason it
+// was not, or nothing when it was.
+std::optional<std::string> CheckpointMismatch(
+    const Workspace& workspace, const FitOptions& used,
+    const std::vector<TrainingView>& views);
 
 }  // namespace pano4d

@@ -301,20 +301,27 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     if (!plan.Runs("motion")) f.init.num_bases = 0;
     if (!plan.Runs("expansion")) f.expand = false;
     const FitOptions used = ResolveFitOptions(f, FitInputOf(frames));
-    std::optional<std::string> mismatch = CheckpointMismatch(ws, used);
-    if (!mismatch && depth_ran) mismatch = "the depth stage ran again";
+    FitInputs inputs = LoadFitInputs(ws);
+    std::optional<std::string> mismatch =
+        depth_ran ? std::optional<std::string>("the depth stage ran again")
+                  : CheckpointMismatch(ws, used, inputs.train);
     if (!mismatch && FitComplete(ws, used.trainer.iterations))
       return StageResult{kReused, "a finished fit with these options on "
                                   "these frames"};
     if (mismatch && fs::exists(ws.checkpoint())) {
       PANO4D_LOG(kInfo) << "run: fit: the workspace's fit is not this one's ("
-                        << *mismatch << "); fitting from the start";
-      // Its expansion products would otherwise be reported as this fit's.
-      fs::remove_all(ws.expansion());
-      fs::remove_all(ws.panorama());
+                        << *mismatch << "); its products are removed and the "
+                        << "fit starts from the beginning";
+      // Else a fit that stops early would leave them to be taken for its
+      // own: the old checkpoint resumed, the old fit.json read as complete.
+      for (const fs::path& p :
+           {ws.checkpoint().parent_path(), ws.fit_json(), ws.expansion(),
+            ws.panorama()})
+        fs::remove_all(p);
     }
     f.resume = !mismatch;
-    const FitSummary r = RunFit(ws, f);
+    f.Check();
+    const FitSummary r = FitController(ws, f, std::move(inputs)).Run();
     if (progress) *progress << r.FullReport() << std::flush;
     return StageResult{"done", mismatch ? *mismatch : "resumed its checkpoint"};
   });

@@ -164,6 +164,22 @@ TEST_F(RunBinaryTest, AChangedInputRunsItsStagesAgainAndAFixedOneCompletes) {
   EXPECT_EQ(results["depth"]["status"], "complete from an earlier run");
   EXPECT_EQ(results["depth"]["why"], "nothing it reads changed");
   EXPECT_EQ(results["fit"]["status"], "complete from an earlier run");
+
+  // Frames changed and listed again by `pano4d depth` by hand: run reuses
+  // that depth stage, but not the fit made on the old frames.
+  fs::copy_file(data / "rgb/2x/0_00004.png", data / "rgb/2x/0_00005.png",
+                fs::copy_options::overwrite_existing);
+  ASSERT_EQ(RunPano4d("depth --workspace '" + ws.string() + "' --dataset '" +
+                          data.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
+  results = ReadJson(ws / "pano4d/plan.json")["results"];
+  EXPECT_EQ(results["depth"]["status"], "complete from an earlier run");
+  EXPECT_EQ(results["fit"]["status"], "done");
+  EXPECT_EQ(results["fit"]["why"],
+            "the checkpoint was written for other frames");
 }
 
 TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {

@@ -106,7 +106,13 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
   const Workspace ws = Listed("ws_resume");
   RunFit(ws, Short(10));
   const FitOptions used = ResolveFitOptions(Short(10), {kDepthFromDataset});
-  EXPECT_FALSE(CheckpointMismatch(ws, used));
+  const FitInputs inputs = LoadFitInputs(ws);
+  EXPECT_FALSE(CheckpointMismatch(ws, used, inputs.train));
+  // Other frames (one pixel changed): another scene.
+  std::vector<TrainingView> other_frames = inputs.train;
+  other_frames[0].rgb[0] += 0.5f;
+  EXPECT_EQ(CheckpointMismatch(ws, used, other_frames).value_or(""),
+            "the checkpoint was written for other frames");
   FitOptions other = Short(10);
   other.resume = true;
   other.init.num_bases = 3;
@@ -118,7 +124,8 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
     EXPECT_EQ(e.value(), "20") << e.what();
   }
   const std::optional<std::string> why =
-      CheckpointMismatch(ws, ResolveFitOptions(other, {kDepthFromDataset}));
+      CheckpointMismatch(ws, ResolveFitOptions(other, {kDepthFromDataset}),
+                         inputs.train);
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("init.num_bases"), std::string::npos) << *why;
   FitOptions seed = Short(10);
