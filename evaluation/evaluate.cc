@@ -183,7 +183,15 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
     m.time_id = f.time_id;
     m.values[kPsnr] = Psnr(a, b);
     m.values[kSsim] = Ssim(a, b)->dycheck;
-    if (lpips) m.values[kLpips] = lpips->Score(a, b);
+    // LPIPS of this render (a failure names it).
+    const auto lpips_score = [&](const cv::Mat& mask) {
+      try {
+        return lpips->Score(a, b, mask);
+      } catch (const Error& e) {
+        throw Error(render_paths[i].string(), "lpips", "", e.what());
+      }
+    };
+    if (lpips) m.values[kLpips] = lpips_score({});
     if (!f.covisible.empty()) {
       ++with_mask;
       const cv::Mat raw = ReadMask(f.covisible);
@@ -198,8 +206,8 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
       m.values[kMpsnr] = Psnr(a, b, covisible);
       m.values[kUpsnr] = Psnr(a, b, unseen);
       if (lpips) {
-        m.values[kMlpips] = lpips->Score(a, b, covisible);
-        m.values[kUlpips] = lpips->Score(a, b, unseen);
+        m.values[kMlpips] = lpips_score(covisible);
+        m.values[kUlpips] = lpips_score(unseen);
       }
       if (const auto s = Ssim(a, b, covisible)) {
         m.values[kMssim] = s->dycheck;

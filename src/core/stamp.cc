@@ -41,14 +41,19 @@ StageInputs& StageInputs::File(const fs::path& path) {
   };
   nlohmann::json& files = json_["files"];
   std::error_code ec;
-  const fs::path workspace = fs::absolute(root_).lexically_normal();
+  // A workspace inside the folder (a dataset's) is not its input, nor are
+  // pano4d's own files when the folder is the workspace.
+  const auto skipped = [&](const fs::path& dir) {
+    std::error_code e;
+    return !root_.empty() && (fs::equivalent(dir, root_, e) ||
+                              fs::equivalent(dir, root_ / "pano4d", e));
+  };
   if (fs::is_directory(path, ec)) {
-    for (fs::recursive_directory_iterator it(path, ec), end; !ec && it != end;
-         it.increment(ec)) {
-      // A workspace inside the folder (a dataset's) is not its input.
-      if (it->is_directory(ec) && !root_.empty() &&
-          fs::absolute(it->path()).lexically_normal() == workspace) {
-        it.disable_recursion_pending();
+    const auto options = fs::directory_options::follow_directory_symlink;
+    for (fs::recursive_directory_iterator it(path, options, ec), end;
+         !ec && it != end; it.increment(ec)) {
+      if (it->is_directory(ec)) {
+        if (skipped(it->path())) it.disable_recursion_pending();
       } else if (it->is_regular_file(ec)) {
         files[key(it->path())] = Facts(it->path());
       }

@@ -24,7 +24,8 @@ class StageInputs {
 
   StageInputs& Option(const std::string& key, nlohmann::json value);
   // A file's size and modification time; a folder's: every regular file
-  // under it; a path that does not exist is recorded as missing.
+  // under it (following links to folders; the workspace and its pano4d/
+  // are left out); a path that does not exist is recorded as missing.
   StageInputs& File(const std::filesystem::path& path);
 
   const nlohmann::json& json() const { return json_; }

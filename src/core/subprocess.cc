@@ -48,14 +48,22 @@ std::string ProcessResult::How() const {
 
 namespace {
 
-// The signal (SIGINT or SIGTERM) pano4d received while a child of its own
-// group ran, or 0.
+// The first of the signals below that pano4d received while a child of its
+// own group ran, or 0.
 volatile std::sig_atomic_t g_received = 0;
 
-void Remember(int signal) { g_received = signal; }
+void Remember(int signal) {
+  if (g_received == 0) g_received = signal;
+}
 
-// While alive: SIGINT and SIGTERM are remembered, not acted on; the
-// previous actions come back at the end.
+// What ends pano4d from outside: Ctrl-C, kill, a closed terminal, Ctrl-\.
+// A child in its own group hears none of them by itself.
+constexpr int kPassedSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+constexpr int kSignalCount = sizeof(kPassedSignals) / sizeof(int);
+
+// While alive: the signals above are remembered, not acted on, except
+// those pano4d ignores (`nohup`, a background job's SIGINT), which stay
+// ignored; the previous actions come back at the end.
 class SignalsRemembered {
  public:
   SignalsRemembered() {
@@ -63,26 +71,29 @@ class SignalsRemembered {
     struct sigaction action {};
     action.sa_handler = Remember;
     sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
+    for (int i = 0; i < kSignalCount; ++i) {
+      sigaction(kPassedSignals[i], nullptr, &old_[i]);
+      if (old_[i].sa_handler != SIG_IGN)
+        sigaction(kPassedSignals[i], &action, nullptr);
+    }
   }
   ~SignalsRemembered() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
+    for (int i = 0; i < kSignalCount; ++i)
+      sigaction(kPassedSignals[i], &old_[i], nullptr);
   }
 
  private:
-  struct sigaction old_int_ {}, old_term_ {};
+  struct sigaction old_[kSignalCount] {};
 };
 
 // Polls the child every this many milliseconds while it may have to be
 // stopped (a time limit, a signal to pass on).
 constexpr int kPollMilliseconds = 10;
 
-// Waits for `pid`; nullopt when `seconds` passed first (seconds < 0: no
-// limit) or a signal was remembered.
-std::optional<int> WaitFor(pid_t pid, double seconds, rusage* usage,
-                           const std::string& what) {
+// Waits for `pid`; nullopt when `seconds` passed first or, with
+// `stop_on_signal`, a signal was remembered.
+std::optional<int> WaitFor(pid_t pid, double seconds, bool stop_on_signal,
+                           rusage* usage, const std::string& what) {
   const Timer timer;
   int status = 0;
   while (true) {
@@ -92,25 +103,32 @@ std::optional<int> WaitFor(pid_t pid, double seconds, rusage* usage,
       throw Error(what, "", "",
                   std::string("wait4 failed: ") + std::strerror(errno));
     }
-    if (g_received != 0 || (seconds >= 0 && timer.WallSeconds() > seconds))
+    if ((stop_on_signal && g_received != 0) ||
+        (seconds >= 0 && timer.WallSeconds() > seconds))
       return std::nullopt;
     ::usleep(kPollMilliseconds * 1000);
   }
 }
 
-// Stops the group `pid` leads: SIGTERM, then SIGKILL after the grace.
+// Stops the group `pid` leads: SIGTERM, then SIGKILL after the grace (or
+// at once when a signal arrives during it), and reaps the child.
 int StopGroup(pid_t pid, rusage* usage, const std::string& what) {
+  const bool signalled = g_received != 0;
   ::kill(-pid, SIGTERM);
-  const std::sig_atomic_t received = g_received;
-  g_received = 0;  // the grace is waited for even after Ctrl-C
-  std::optional<int> status = WaitFor(pid, kStopGraceSeconds, usage, what);
+  std::optional<int> status =
+      WaitFor(pid, kStopGraceSeconds, /*stop_on_signal=*/!signalled, usage,
+              what);
+  ::kill(-pid, SIGKILL);  // the child, if still there, and what it left
   if (!status) {
-    ::kill(-pid, SIGKILL);
-    g_received = 0;
-    status = WaitFor(pid, -1, usage, what);
+    int raw = 0;
+    while (wait4(pid, &raw, 0, usage) < 0) {
+      if (errno != EINTR) {
+        throw Error(what, "", "",
+                    std::string("wait4 failed: ") + std::strerror(errno));
+      }
+    }
+    status = raw;
   }
-  ::kill(-pid, SIGKILL);  // what the child left behind in its group
-  if (received != 0) g_received = received;
   return *status;
 }
 
@@ -177,7 +195,8 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
   } else {
     const double limit =
         options.timeout_seconds > 0 ? options.timeout_seconds : -1.0;
-    if (const std::optional<int> done = WaitFor(pid, limit, &usage, what)) {
+    if (const std::optional<int> done =
+            WaitFor(pid, limit, /*stop_on_signal=*/true, &usage, what)) {
       status = *done;
     } else {
       r.timed_out = g_received == 0;
@@ -185,8 +204,8 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
     }
     const int received = g_received;
     remembered.reset();
-    // Ctrl-C (or SIGTERM) while the child ran: the child's group is
-    // stopped; now pano4d ends as the signal would have ended it.
+    // A signal while the child ran: the child's group is stopped; now
+    // pano4d ends as the signal would have ended it.
     if (received != 0) std::raise(received);
   }
   r.seconds = timer.WallSeconds();

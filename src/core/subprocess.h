@@ -1,7 +1,8 @@
 #pragma once
 
-// Child processes: external tools (colmap) and pano4d's own stages run as
-// separate processes (bench datasets), each with its output in a log file.
+// Child processes: external tools (colmap, a prior command) and pano4d's
+// own stages run as separate processes (bench datasets), each with its
+// output in a log file.
 
 #include <filesystem>
 #include <optional>
@@ -24,7 +25,8 @@ struct ProcessResult {
   // (wait4's ru_maxrss), in MiB.
   double peak_memory_mib = 0.0;
   bool ok() const { return exit_code == 0; }
-  std::string How() const;  // "exit status 3", "killed by signal 9"
+  // "exit status 3", "killed by signal 9", "stopped at its time limit"
+  std::string How() const;
 };
 
 // A child that outlives its time limit gets SIGTERM, and SIGKILL this many
@@ -37,9 +39,11 @@ struct ProcessOptions {
   // then SIGKILL after kStopGraceSeconds); 0: no limit. Needs own_group.
   double timeout_seconds = 0.0;
   // The child leads its own process group, so that a stop reaches all it
-  // started (a shell's pipeline). While it runs, SIGINT and SIGTERM to
-  // pano4d stop the group first and then end pano4d as the signal would
-  // have: the terminal's Ctrl-C no longer reaches the group by itself.
+  // started (a shell's pipeline). While it runs, SIGINT, SIGTERM, SIGHUP
+  // and SIGQUIT to pano4d (unless pano4d ignores them) stop the group
+  // first and then end pano4d as the signal would have: the terminal's
+  // Ctrl-C no longer reaches the group by itself. A pano4d killed with
+  // SIGKILL cannot pass anything on: the group then runs on by itself.
   bool own_group = false;
 };
 

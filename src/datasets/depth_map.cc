@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "src/core/error.h"
+#include "src/core/log.h"
 #include "src/core/npy.h"
 
 namespace pano4d {
@@ -34,15 +35,16 @@ cv::Mat ReadDepthMap(const fs::path& path) {
     }
     raw.convertTo(m, CV_32F, raw.depth() == CV_16U ? 1e-3 : 1.0);
   }
-  m.forEach<float>([](float& d, const int*) {
-    if (!std::isfinite(d) || d < 0) d = 0;
-  });
-  double largest = 0;
-  cv::minMaxLoc(m, nullptr, &largest);
-  if (largest > kMaxPlausibleDepth) {
-    throw Error(path.string(), "depth", std::to_string(largest),
-                "beyond any scene: expected z-depth in the scene's units "
-                "(metres, or a dataset's own), 0 where none");
+  std::int64_t beyond = 0;
+  for (float& d : cv::Mat_<float>(m)) {
+    if (d > kMaxPlausibleDepth) ++beyond;
+    if (!std::isfinite(d) || d < 0 || d > kMaxPlausibleDepth) d = 0;
+  }
+  if (beyond > 0) {
+    PANO4D_LOG(kWarning) << path.string() << ": " << beyond
+                         << " pixels beyond " << kMaxPlausibleDepth
+                         << " scene units taken as no depth (a renderer's "
+                            "background, or a broken conversion?)";
   }
   return m;
 }

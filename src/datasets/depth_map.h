@@ -13,15 +13,16 @@
 namespace pano4d {
 
 // A depth map file: .npy (H x W or H x W x 1) or an image OpenCV reads
-// unchanged (16-bit PNG in millimetres, float TIFF or EXR). Non-finite and
-// negative values become 0. Throws pano4d::Error naming the file when it
+// unchanged (16-bit PNG in millimetres, float TIFF or EXR). Non-finite,
+// negative and implausibly far values become 0. Throws pano4d::Error naming the file when it
 // is none of these.
 cv::Mat ReadDepthMap(const std::filesystem::path& path);
 
 // The largest depth a map may hold: a million scene units (1000 km in
-// metres) is no capture; such values are a broken conversion (1e30 from a
-// float bit pattern), which would otherwise reach the initialisation's
-// k-means as an OpenCV error. ReadDepthMap refuses them, naming the file.
+// metres) is no surface of a capture; such values are a renderer's
+// background (Blender's Z pass: 1e10) or a broken conversion (1e30), which
+// would otherwise reach the initialisation's k-means as an OpenCV error.
+// ReadDepthMap takes them as no depth, with a warning naming the file.
 inline constexpr double kMaxPlausibleDepth = 1e6;
 
 // A dataset frame's z-depth (its file by the dataset's convention), of its

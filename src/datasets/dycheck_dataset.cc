@@ -161,7 +161,7 @@ int MakeTimeIdsDense(std::vector<DatasetFrame*> frames,
   std::sort(times.begin(), times.end());
   times.erase(std::unique(times.begin(), times.end()), times.end());
   if (times.empty()) return 0;
-  if (times.back() + 1 == static_cast<int>(times.size()))
+  if (times.back() == static_cast<int>(times.size()) - 1)
     return static_cast<int>(times.size());
   PANO4D_LOG(kWarning) << source << ": time ids 0.." << times.back()
                        << " name " << times.size()

@@ -226,10 +226,12 @@ void WriteCommandInput(const PriorClip& clip, const fs::path& in) {
   WriteJson(in / "meta.json", meta);
 }
 
-// The last non-empty line of a log, shortened, for the error message.
+// The last non-empty line the command wrote to its log (after the command
+// line RunProcess heads it with), shortened, for the error message.
 std::string LastLogLine(const fs::path& log) {
   std::ifstream stream(log);
   std::string line, last;
+  std::getline(stream, line);  // "$ /bin/sh -c ..."
   while (std::getline(stream, line)) {
     if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
   }
@@ -421,8 +423,7 @@ PriorResult CommandPrior::Fill(const PriorClip& clip) {
     std::string line = ReplaceAll(command_, "{in}", ShellQuote(in.string()));
     line = ReplaceAll(line, "{out}", ShellQuote(out.string()));
     PANO4D_LOG(kInfo) << "prior command for clip " << clip.name << ": " << line;
-    // The newline ends a trailing '#' comment in the template.
-    problem = RunShell("( " + line + "\n)", log, timeout_seconds_);
+    problem = RunShell(line, log, timeout_seconds_);
   } catch (const Error& e) {
     problem = std::string("cannot prepare its input: ") + e.what();
   }

@@ -521,6 +521,9 @@ TEST(CommandPriorTest, AHangingCommandIsStoppedAtItsTimeLimitWithItsChildren) {
   EXPECT_NE(result.note.find("stopped at its time limit of 0.5 s"),
             std::string::npos)
       << result.note;
+  // Nothing printed: the note quotes no line (not the log's command line).
+  EXPECT_EQ(result.note.find("\": \""), std::string::npos) << result.note;
+  EXPECT_EQ(result.note.find("/bin/sh"), std::string::npos) << result.note;
   EXPECT_LT(seconds, 10.0);  // the limit is what ended it, not the sleep
   // The sleep the shell started went with it.
   std::ifstream in(pid_file);

@@ -206,8 +206,8 @@ std::string ErrorSource(Run run) {
 }
 
 // Bad dataset files are named by the depth stage, before any fit: a
-// covisible mask of another size, a depth map of 1e30 (a broken
-// conversion); a map with no valid pixel is a warning.
+// covisible mask of another size is an error; a depth map of 1e30 (a
+// broken conversion) or NaN gives a warning and no depth.
 TEST_F(DepthStageTest, BadDatasetFilesAreNamedBeforeTheFit) {
   const fs::path data = dir_->path() / "bad_files";
   fs::copy(dir_->path() / "tiny", data, fs::copy_options::recursive);
@@ -224,20 +224,25 @@ TEST_F(DepthStageTest, BadDatasetFilesAreNamedBeforeTheFit) {
   EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), mask.string());
   WriteMask(mask, good_mask);
 
+  // 1e30 (a broken conversion) and NaN: no depth, said with the file.
   const fs::path depth = d.train[2].depth;
   const cv::Mat good_depth = ReadDepthMap(depth);
-  WriteDepthMap(depth, cv::Mat(good_depth.size(), CV_32F, cv::Scalar(1e30)));
-  EXPECT_EQ(ErrorSource([&] { RunDepth(ws, o); }), depth.string());
-
-  WriteDepthMap(depth, cv::Mat(good_depth.size(), CV_32F,
-                               cv::Scalar(std::nanf(""))));
-  std::ostringstream log;
-  SetLogSink(&log);
-  EXPECT_NO_THROW(RunDepth(ws, o));
-  SetLogSink(nullptr);
-  EXPECT_NE(log.str().find(depth.string() + ": no valid depth"),
-            std::string::npos)
-      << log.str();
+  for (const float bad : {1e30f, std::nanf("")}) {
+    WriteDepthMap(depth, cv::Mat(good_depth.size(), CV_32F, cv::Scalar(bad)));
+    std::ostringstream log;
+    SetLogSink(&log);
+    EXPECT_NO_THROW(RunDepth(ws, o));
+    SetLogSink(nullptr);
+    EXPECT_NE(log.str().find(depth.string() + ": no valid depth"),
+              std::string::npos)
+        << log.str();
+    if (bad > 0) {
+      EXPECT_NE(log.str().find(depth.string() + ": 3072 pixels beyond"),
+                std::string::npos)
+          << log.str();
+    }
+    EXPECT_EQ(cv::countNonZero(ReadDepthMap(ws.depth_map(d.train[2].id))), 0);
+  }
 }
 
 // A COLMAP model whose cameras disagree with its images: stereo names the
