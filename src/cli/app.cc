@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <omp.h>
 
 #include "src/core/error.h"
 #include "src/core/log.h"
@@ -33,6 +34,15 @@ int Main(int argc, char** argv) {
   bool quiet = false;
   app.add_flag("-v,--verbose", verbose, "Same as --log-level debug");
   app.add_flag("-q,--quiet", quiet, "Same as --log-level warning");
+  int threads = 0;
+  app.add_option("--threads", threads,
+                 "Threads for pano4d's parallel loops; 0: one per core. On "
+                 "a machine shared with other work, fewer leave it cores "
+                 "(waiting threads sleep rather than spin)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  // Global options may follow the subcommand: `pano4d fit -q --threads 1`.
+  app.fallthrough();
 
   Action action;
   AddInspectCommand(app, &action);
@@ -64,6 +74,7 @@ int Main(int argc, char** argv) {
     return kExitUsage;
   }
 
+  if (threads > 0) omp_set_num_threads(threads);
   SetLogLevel(verbose ? LogLevel::kDebug
               : quiet ? LogLevel::kWarning
                       : ParseLogLevel(log_level).value_or(LogLevel::kInfo));

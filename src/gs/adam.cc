@@ -75,20 +75,30 @@ AdamStepStats Adam::Step(
   const double b1 = options_.beta1, b2 = options_.beta2;
   const double correction1 = 1 - std::pow(b1, static_cast<double>(step_));
   const double correction2 = 1 - std::pow(b2, static_cast<double>(step_));
-  AdamStepStats stats;
+  for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+    const std::vector<float>* grad = gradients[gi];
+    if (grad != nullptr && !grad->empty() &&
+        grad->size() != groups_[gi].params->size()) {
+      throw Error("adam", groups_[gi].name + " gradient",
+                  std::to_string(grad->size()),
+                  "expected " + std::to_string(groups_[gi].params->size()) +
+                      " values");
+    }
+  }
+  const double root_correction2 = std::sqrt(correction2);
+  std::int64_t skipped = 0;
+  // One parallel region for every group (the groups are independent, so
+  // no barrier between them): each region start wakes the worker threads,
+  // which on a busy machine or with passive waits costs more than a
+  // small group's update.
+#pragma omp parallel reduction(+ : skipped)
   for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
     Group& g = groups_[gi];
     const std::vector<float>* grad = gradients[gi];
     if (grad == nullptr || grad->empty()) continue;
-    if (grad->size() != g.params->size()) {
-      throw Error("adam", g.name + " gradient", std::to_string(grad->size()),
-                  "expected " + std::to_string(g.params->size()) + " values");
-    }
     const double step_size = g.lr / correction1;
-    const double root_correction2 = std::sqrt(correction2);
     std::vector<float>& p = *g.params;
-    std::int64_t skipped = 0;
-#pragma omp parallel for schedule(static) reduction(+ : skipped)
+#pragma omp for schedule(static) nowait
     for (std::int64_t row = 0; row < rows_; ++row) {
       const std::size_t begin = static_cast<std::size_t>(row) * g.width;
       bool finite = true;
@@ -110,8 +120,9 @@ AdamStepStats Adam::Step(
             (std::sqrt(v) / root_correction2 + options_.epsilon));
       }
     }
-    stats.skipped_rows += skipped;
   }
+  AdamStepStats stats;
+  stats.skipped_rows = skipped;
   return stats;
 }
 

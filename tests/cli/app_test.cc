@@ -1,9 +1,11 @@
 #include "src/cli/app.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <set>
@@ -87,6 +89,27 @@ TEST(CliTest, ANegativeSeedIsAUsageErrorNotAWrappedOne) {
   EXPECT_EQ(
       RunCli({"fit", "--workspace", PANO4D_SOURCE_DIR, "--seed", "7"}).status,
       kExitError);
+}
+
+// --threads, before or after the subcommand, sets the threads the parallel
+// loops use (bench reports them); a negative count is a usage error.
+TEST(CliTest, ThreadsSetsTheParallelLoopsThreads) {
+  const std::vector<std::string> bench = {
+      "bench", "render", "--json", "--repeats", "1", "--gaussians", "100",
+      "--width", "32", "--height", "24"};
+  for (const bool after : {false, true}) {
+    std::vector<std::string> args = bench;
+    args.insert(after ? args.end() : args.begin(), {"--threads", "1"});
+    const Result r = RunCli(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("\"threads\":1"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(RunCli({"--threads", "-2", "bench", "render"}).status, kExitUsage);
+  // Back to one thread per core for the tests that follow.
+  std::vector<std::string> all = bench;
+  all.insert(all.begin(), {"--threads", std::to_string(std::max(
+                              1u, std::thread::hardware_concurrency()))});
+  EXPECT_EQ(RunCli(all).status, 0);
 }
 
 TEST(CliTest, SfmRefusesBadOptionsBeforeRunningAnything) {

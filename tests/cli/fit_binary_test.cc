@@ -329,7 +329,10 @@ TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
       "--iterations",      "40", "--checkpoint-every", "10",
       "--expand-every",    "20", "--expansion-steps",  "1",
       "--directions",      "1",  "--expansion-stride", "4",
-      "--panorama-width",  "64", "--prior-cmd",        "sleep 60 # {in} {out}"};
+      "--panorama-width",  "64", "--prior-cmd",
+      // The wait policy pano4d runs with (main.cc), then a hang.
+      "echo $OMP_WAIT_POLICY > '" + (ws / "policy.txt").string() +
+          "'; sleep 60 # {in} {out}"};
   std::vector<std::string> args = {"fit", "--workspace", ws.string()};
   args.insert(args.end(), options.begin(), options.end());
   const pid_t pid = Spawn(args, ws / "fit1.log");
@@ -359,10 +362,18 @@ TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
       << "status " << status << "\n"
       << Slurp(ws / "fit1.log");
   EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+  // OpenMP's threads sleep rather than spin unless the user said otherwise.
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  EXPECT_EQ(Slurp(ws / "policy.txt"),
+            std::string(policy ? policy : "passive") + "\n");
 
   std::string resume = "fit --workspace '" + ws.string() + "' --resume";
-  for (const std::string& o : options)
-    resume += " '" + o + "'";
+  for (const std::string& o : options) {
+    std::string quoted;  // for the shell: ' becomes '\''
+    for (char c : o)
+      quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    resume += " '" + quoted + "'";
+  }
   resume += " --prior-timeout 1";
   ASSERT_EQ(RunPano4d(resume, ws / "fit2.log"), 0) << Slurp(ws / "fit2.log");
   const std::string log = Slurp(ws / "fit2.log");
