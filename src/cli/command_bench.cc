@@ -57,9 +57,10 @@ void AddBenchRender(CLI::App* bench, Action* action) {
       "render",
       "Rasterizer speed: forward ms, fps and Gaussian-pixel evaluations per "
       "second");
-  sub->add_option("--workspace", o->workspace,
+  sub->add_option("--workspace,--checkpoint", o->workspace,
                   "Time the scene `pano4d fit` fitted in this workspace "
-                  "(its checkpoint) from its training cameras instead")
+                  "(its checkpoint: the Gaussians a real scene has) from its "
+                  "training cameras instead of random Gaussians")
       ->check(CLI::ExistingDirectory);
   sub->add_option("--gaussians", o->gaussians,
                   "Scene sizes (default 10k, 100k, 500k)")

@@ -107,7 +107,7 @@ TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
 
   // The rasterizer's benchmark on the fitted scene.
   const fs::path bench = ws / "bench.json";
-  ASSERT_EQ(RunPano4d("bench render --json --repeats 2 --workspace '" +
+  ASSERT_EQ(RunPano4d("bench render --json --repeats 2 --checkpoint '" +
                           ws.string() + "'",
                       bench),
             0)
