@@ -4,9 +4,11 @@
 // RasterizerT::Project.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <Eigen/Geometry>
 
+#include "src/core/error.h"
 #include "src/render/quaternion.h"
 #include "src/render/rasterizer.h"
 #include "src/render/sh.h"
@@ -32,8 +34,19 @@ void RasterizerT<T>::ProjectBackward(const GaussianModelT<T>& model,
   using Mat3 = Eigen::Matrix<T, 3, 3>;
   using Mat2 = Eigen::Matrix<T, 2, 2>;
   using Mat23 = Eigen::Matrix<T, 2, 3>;
-  grad->Assign(model);
   const ProjectedGaussiansT<T>& p = projected_;
+  // The forward's state is indexed by Gaussian: another model (a larger one
+  // would be read past the end) or other 2D gradients are refused.
+  if (model.size() != p.radius.size() || g2d.x.size() != p.radius.size()) {
+    throw Error("rasterizer", "projection backward",
+                std::to_string(model.size()) + " Gaussians, 2D gradients of " +
+                    std::to_string(g2d.x.size()),
+                "the last forward projected " +
+                    std::to_string(p.radius.size()) +
+                    ": pass the model of that forward and its blend "
+                    "backward's gradients");
+  }
+  grad->Assign(model);
   const int k_count = model.sh_coefficients();
   const T lim_x = T(kFovClamp) * T(0.5) * camera.width / camera.fx;
   const T lim_y = T(kFovClamp) * T(0.5) * camera.height / camera.fy;

@@ -133,7 +133,9 @@ class RasterizerT {
                      ProjectedGradientsT<T>* grad);
 
   // The projection's backward: from the 2D gradients of BlendBackward to
-  // the model's parameters. `model` and `camera` must be the last forward's.
+  // the model's parameters. `model` and `camera` must be the last forward's;
+  // a model or 2D gradients of another size than that forward's throw
+  // pano4d::Error naming both sizes.
   void ProjectBackward(const GaussianModelT<T>& model,
                        const RasterCameraT<T>& camera,
                        const ProjectedGradientsT<T>& grad2d,

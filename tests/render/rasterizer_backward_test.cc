@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/error.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -210,6 +211,31 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
             << " model gradients within 1e-3\n";
   EXPECT_GE(tally.good, 0.99 * tally.checked);
   EXPECT_GT(tally.checked, 1000);
+}
+
+// A backward given another model than the last forward's is refused, with
+// both sizes named, instead of reading past the forward's state.
+TEST(RasterizerBackwardTest, AModelOfAnotherSizeThanTheForwardsIsRefused) {
+  const RasterCameraT<double> camera = SmallCamera();
+  const RasterSettingsT<double> settings;
+  Rd rasterizer;
+  RenderOutputT<double> out;
+  const GaussianModelT<double> model = Scene(7, 16);
+  rasterizer.Forward(model, camera, settings, &out);
+  ProjectedGradientsT<double> grad2d;
+  const std::vector<double> d_rgb(out.rgb.size(), 1.0), none;
+  rasterizer.BlendBackward(camera, settings, out, d_rgb, none, none, &grad2d);
+  GaussianGradientsT<double> grad;
+  EXPECT_NO_THROW(rasterizer.ProjectBackward(model, camera, grad2d, &grad));
+  const GaussianModelT<double> larger = Scene(7, 20);
+  try {
+    rasterizer.ProjectBackward(larger, camera, grad2d, &grad);
+    FAIL() << "a model of 20 Gaussians was taken for the forward's 16";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("20 Gaussians"), std::string::npos) << what;
+    EXPECT_NE(what.find("projected 16"), std::string::npos) << what;
+  }
 }
 
 }  // namespace
