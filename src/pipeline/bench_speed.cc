@@ -96,7 +96,8 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
   RenderOutput out;
   scene.ComposeAt(times[0], &model);
   rasterizer.Forward(model, cameras[0], {}, &out);  // warm-up
-  std::vector<double> compose_ms, forward_ms, backward_ms;
+  std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
+      blend_ms, blend_backward_ms, project_backward_ms;
   std::uint64_t visible = 0, evaluations = 0;
   ProjectedGradients grad2d;
   GaussianGradients grad;
@@ -108,12 +109,18 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
     Timer forward;
     rasterizer.Forward(model, cameras[v], {}, &out);
     forward_ms.push_back(1e3 * forward.WallSeconds());
+    project_ms.push_back(rasterizer.stats().project_ms);
+    bin_ms.push_back(rasterizer.stats().bin_ms);
+    blend_ms.push_back(rasterizer.stats().blend_ms);
     visible += rasterizer.stats().visible;
     evaluations += rasterizer.stats().pixel_evaluations;
     const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), none;
     Timer backward;
     rasterizer.BlendBackward(cameras[v], {}, out, d_rgb, none, none, &grad2d);
+    blend_backward_ms.push_back(1e3 * backward.WallSeconds());
+    Timer project_backward;
     rasterizer.ProjectBackward(model, cameras[v], grad2d, &grad);
+    project_backward_ms.push_back(1e3 * project_backward.WallSeconds());
     backward_ms.push_back(1e3 * backward.WallSeconds());
   }
   const double f = UpperMedian(forward_ms), b = UpperMedian(backward_ms),
@@ -129,6 +136,12 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
                          {"threads", threads},
                          {"compose_ms", c},
                          {"forward_ms", f},
+                         {"project_ms", UpperMedian(project_ms)},
+                         {"bin_ms", UpperMedian(bin_ms)},
+                         {"blend_ms", UpperMedian(blend_ms)},
+                         {"blend_backward_ms", UpperMedian(blend_backward_ms)},
+                         {"project_backward_ms",
+                          UpperMedian(project_backward_ms)},
                          {"forward_backward_ms", f + b},
                          {"fps", 1e3 / f},
                          {"visible", visible / options.repeats},
@@ -147,6 +160,11 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
       StringPrintf("%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n",
                    scene.size(), width, height, c, f, 1e3 / f, f + b,
                    static_cast<unsigned long long>(visible / options.repeats));
+  result.table += StringPrintf(
+      "forward: project %.2f, bin %.2f, blend %.2f ms; backward: blend "
+      "%.2f, project %.2f ms (medians)\n",
+      UpperMedian(project_ms), UpperMedian(bin_ms), UpperMedian(blend_ms),
+      UpperMedian(blend_backward_ms), UpperMedian(project_backward_ms));
   return result;
 }
 

@@ -81,6 +81,8 @@ struct RasterStats {
   std::uint64_t visible = 0;            // Gaussians that survived projection
   std::uint64_t tile_entries = 0;       // (Gaussian, tile) pairs
   std::uint64_t pixel_evaluations = 0;  // (Gaussian, pixel) pairs blended
+  // Wall time of the forward's stages, milliseconds.
+  double project_ms = 0, bin_ms = 0, blend_ms = 0;
 };
 
 // Gradients of a loss with respect to the projected (2D) Gaussians: what

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "src/core/error.h"
+#include "src/core/timer.h"
 #include "src/render/blend_kernel.h"
 #include "src/render/quaternion.h"
 #include "src/render/rasterizer.h"
@@ -324,13 +325,19 @@ void RasterizerT<T>::Forward(const GaussianModelT<T>& model,
         std::to_string(camera.width) + "x" + std::to_string(camera.height),
         "image size must be positive");
   }
+  Timer timer;
   Project(model, camera);
+  stats_.project_ms = 1e3 * timer.WallSeconds();
+  timer.Restart();
   Bin(camera);
+  stats_.bin_ms = 1e3 * timer.WallSeconds();
   stats_.visible = static_cast<std::uint64_t>(
       std::count_if(projected_.radius.begin(), projected_.radius.end(),
                     [](int r) { return r > 0; }));
   stats_.tile_entries = ids_.size();
+  timer.Restart();
   Blend(camera, settings, out);
+  stats_.blend_ms = 1e3 * timer.WallSeconds();
 }
 
 template <typename T>

@@ -117,6 +117,16 @@ TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
             fit.at("static_gaussians").get<int>() +
                 fit.at("dynamic_gaussians").get<int>());
   EXPECT_GT(row.at("forward_ms").get<double>(), 0.0);
+  // The stages of a step, each timed: the forward's add up to it.
+  double stages = 0;
+  for (const char* key : {"project_ms", "bin_ms", "blend_ms"}) {
+    ASSERT_TRUE(row.contains(key)) << key;
+    EXPECT_GT(row[key].get<double>(), 0.0) << key;
+    stages += row[key].get<double>();
+  }
+  EXPECT_LE(stages, 1.5 * row["forward_ms"].get<double>() + 0.1);
+  for (const char* key : {"blend_backward_ms", "project_backward_ms"})
+    EXPECT_GT(row.at(key).get<double>(), 0.0) << key;
 }
 
 TEST_F(FitBinaryTest, NoMotionHasNoMotionParameters) {
