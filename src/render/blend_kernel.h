@@ -118,14 +118,20 @@ template <typename T>
 inline bool BoxInTile(const ProjectedGaussiansT<T>& p, std::uint32_t g,
                       int x_begin, int x_end, int y_begin, int y_end,
                       TileBox* box) {
-  const int x0 = std::max(
-      x_begin, static_cast<int>(std::ceil(p.x[g] - p.extent_x[g] - T(0.5))));
-  const int x1 = std::min(
-      x_end - 1, static_cast<int>(std::floor(p.x[g] + p.extent_x[g] - T(0.5))));
-  box->y0 = std::max(
-      y_begin, static_cast<int>(std::ceil(p.y[g] - p.extent_y[g] - T(0.5))));
-  box->y1 = std::min(
-      y_end - 1, static_cast<int>(std::floor(p.y[g] + p.extent_y[g] - T(0.5))));
+  // Clamped to the tile (one past it for an empty box) before the
+  // conversion: a Gaussian far off screen or of enormous extent gives
+  // values beyond int's range, whose conversion is undefined.
+  const auto first = [](T v, int begin, int end) {
+    return static_cast<int>(std::clamp(std::ceil(v), T(begin), T(end)));
+  };
+  const auto last = [](T v, int begin, int end) {
+    return static_cast<int>(
+        std::clamp(std::floor(v), T(begin - 1), T(end - 1)));
+  };
+  const int x0 = first(p.x[g] - p.extent_x[g] - T(0.5), x_begin, x_end);
+  const int x1 = last(p.x[g] + p.extent_x[g] - T(0.5), x_begin, x_end);
+  box->y0 = first(p.y[g] - p.extent_y[g] - T(0.5), y_begin, y_end);
+  box->y1 = last(p.y[g] + p.extent_y[g] - T(0.5), y_begin, y_end);
   box->group0 = (x0 - x_begin) / kLaneGroup;
   box->group1 = (x1 - x_begin) / kLaneGroup;
   return x0 <= x1 && box->y0 <= box->y1;
