@@ -385,7 +385,8 @@ SfmReport RunSfm(const SfmOptions& o) {
       {"stride", o.stride},
       {"max_frames", o.max_frames},
       {"max_size", o.max_size},
-      {"known", [&] {
+      {"known",
+       [&] {
          nlohmann::json images = nlohmann::json::array();
          for (const KnownFrame& f : o.known)
            images.push_back(fs::absolute(f.image).string());

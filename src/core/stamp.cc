@@ -24,8 +24,7 @@ nlohmann::json Facts(const fs::path& file) {
 
 }  // namespace
 
-StageInputs& StageInputs::Option(const std::string& key,
-                                 nlohmann::json value) {
+StageInputs& StageInputs::Option(const std::string& key, nlohmann::json value) {
   json_["options"][key] = std::move(value);
   return *this;
 }
@@ -35,8 +34,8 @@ StageInputs& StageInputs::File(const fs::path& path) {
     const fs::path absolute = fs::absolute(p).lexically_normal();
     const fs::path relative =
         absolute.lexically_relative(fs::absolute(root_).lexically_normal());
-    const bool inside = !root_.empty() && !relative.empty() &&
-                        *relative.begin() != "..";
+    const bool inside =
+        !root_.empty() && !relative.empty() && *relative.begin() != "..";
     return (inside ? relative : absolute).generic_string();
   };
   nlohmann::json& files = json_["files"];

@@ -115,9 +115,8 @@ std::optional<int> WaitFor(pid_t pid, double seconds, bool stop_on_signal,
 int StopGroup(pid_t pid, rusage* usage, const std::string& what) {
   const bool signalled = g_received != 0;
   ::kill(-pid, SIGTERM);
-  std::optional<int> status =
-      WaitFor(pid, kStopGraceSeconds, /*stop_on_signal=*/!signalled, usage,
-              what);
+  std::optional<int> status = WaitFor(
+      pid, kStopGraceSeconds, /*stop_on_signal=*/!signalled, usage, what);
   ::kill(-pid, SIGKILL);  // the child, if still there, and what it left
   if (!status) {
     int raw = 0;

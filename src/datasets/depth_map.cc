@@ -41,8 +41,8 @@ cv::Mat ReadDepthMap(const fs::path& path) {
     if (!std::isfinite(d) || d < 0 || d > kMaxPlausibleDepth) d = 0;
   }
   if (beyond > 0) {
-    PANO4D_LOG(kWarning) << path.string() << ": " << beyond
-                         << " pixels beyond " << kMaxPlausibleDepth
+    PANO4D_LOG(kWarning) << path.string() << ": " << beyond << " pixels beyond "
+                         << kMaxPlausibleDepth
                          << " scene units taken as no depth (a renderer's "
                             "background, or a broken conversion?)";
   }

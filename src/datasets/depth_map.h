@@ -14,8 +14,8 @@ namespace pano4d {
 
 // A depth map file: .npy (H x W or H x W x 1) or an image OpenCV reads
 // unchanged (16-bit PNG in millimetres, float TIFF or EXR). Non-finite,
-// negative and implausibly far values become 0. Throws pano4d::Error naming the file when it
-// is none of these.
+// negative and implausibly far values become 0. Throws pano4d::Error naming the
+// file when it is none of these.
 cv::Mat ReadDepthMap(const std::filesystem::path& path);
 
 // The largest depth a map may hold: a million scene units (1000 km in

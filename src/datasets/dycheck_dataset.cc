@@ -163,9 +163,9 @@ int MakeTimeIdsDense(std::vector<DatasetFrame*> frames,
   if (times.empty()) return 0;
   if (times.back() == static_cast<int>(times.size()) - 1)
     return static_cast<int>(times.size());
-  PANO4D_LOG(kWarning) << source << ": time ids 0.." << times.back()
-                       << " name " << times.size()
-                       << " times; numbered 0.." << times.size() - 1
+  PANO4D_LOG(kWarning) << source << ": time ids 0.." << times.back() << " name "
+                       << times.size() << " times; numbered 0.."
+                       << times.size() - 1
                        << " in their order (the motion model holds one "
                           "pose per time)";
   for (DatasetFrame* f : frames) {

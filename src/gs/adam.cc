@@ -79,10 +79,9 @@ AdamStepStats Adam::Step(
     const std::vector<float>* grad = gradients[gi];
     if (grad != nullptr && !grad->empty() &&
         grad->size() != groups_[gi].params->size()) {
-      throw Error("adam", groups_[gi].name + " gradient",
-                  std::to_string(grad->size()),
-                  "expected " + std::to_string(groups_[gi].params->size()) +
-                      " values");
+      throw Error(
+          "adam", groups_[gi].name + " gradient", std::to_string(grad->size()),
+          "expected " + std::to_string(groups_[gi].params->size()) + " values");
     }
   }
   const double root_correction2 = std::sqrt(correction2);

@@ -21,8 +21,7 @@ namespace {
 // Version 2 ends in a checksum; version 1 (no checksum, no scene
 // fingerprint) is still read for its scene, never resumed.
 constexpr char kCheckpointMagic[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '2'};
-constexpr char kCheckpointMagicV1[8] = {'P', '4', 'D',
-                                        'C', 'K', 'P', 'T', '1'};
+constexpr char kCheckpointMagicV1[8] = {'P', '4', 'D', 'C', 'K', 'P', 'T', '1'};
 constexpr std::size_t kChecksumSize = sizeof(std::uint64_t);
 
 }  // namespace
@@ -275,9 +274,8 @@ std::string ReadCheckpointSceneFingerprint(const fs::path& path) {
 
 GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
                                   const std::string& source) {
-  return WithHeaderErrors(source, [&] {
-    return CheckpointFile(std::move(bytes), source).Scene();
-  });
+  return WithHeaderErrors(
+      source, [&] { return CheckpointFile(std::move(bytes), source).Scene(); });
 }
 
 GaussianScene ReadCheckpointScene(const fs::path& path) {
@@ -294,9 +292,8 @@ void Trainer::LoadCheckpoint(const fs::path& path) {
 
 void Trainer::LoadCheckpoint(std::vector<std::uint8_t> bytes,
                              const std::string& source) {
-  WithHeaderErrors(source, [&] {
-    Restore(CheckpointFile(std::move(bytes), source));
-  });
+  WithHeaderErrors(source,
+                   [&] { Restore(CheckpointFile(std::move(bytes), source)); });
 }
 
 void Trainer::Restore(const CheckpointFile& file) {
@@ -340,15 +337,14 @@ void Trainer::Restore(const CheckpointFile& file) {
   const std::int64_t iteration = header.at("iteration").get<std::int64_t>();
   if (iteration < 0 || iteration > options_.iterations) {
     throw Error(source, "iteration", std::to_string(iteration),
-                "outside this run's 0.." +
-                    std::to_string(options_.iterations) +
+                "outside this run's 0.." + std::to_string(options_.iterations) +
                     " (corrupt checkpoint)");
   }
   for (const auto& [name, step] : header.at("adam_steps").items()) {
     if (step.get<std::int64_t>() < 0 || step.get<std::int64_t>() > iteration)
-      throw Error(source, "adam_steps." + name, step.dump(),
-                  "outside 0.." + std::to_string(iteration) +
-                      " (corrupt checkpoint)");
+      throw Error(
+          source, "adam_steps." + name, step.dump(),
+          "outside 0.." + std::to_string(iteration) + " (corrupt checkpoint)");
   }
   if (header.at("num_bases").get<int>() != scene_.bases.num_bases ||
       header.at("sh_degree").get<int>() != scene_.statics.sh_degree ||
