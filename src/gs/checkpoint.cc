@@ -265,10 +265,11 @@ Json ReadCheckpointFingerprint(const fs::path& path) {
   return ReadCheckpointFingerprint(ReadFileBytes(path), path.string());
 }
 
-std::string ReadCheckpointSceneFingerprint(const fs::path& path) {
+CheckpointFingerprints ReadCheckpointFingerprints(const fs::path& path) {
   return WithHeaderErrors(path.string(), [&] {
     const CheckpointFile file(ReadFileBytes(path), path.string());
-    return file.header.value("scene", std::string());
+    return CheckpointFingerprints{file.header.value("fingerprint", Json()),
+                                  file.header.value("scene", std::string())};
   });
 }
 

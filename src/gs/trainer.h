@@ -170,9 +170,14 @@ GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
 nlohmann::json ReadCheckpointFingerprint(const std::filesystem::path& path);
 nlohmann::json ReadCheckpointFingerprint(std::vector<std::uint8_t> bytes,
                                          const std::string& source);
-// The scene a checkpoint was written for (ViewsFingerprint); empty for a
-// checkpoint from before pano4d stored one.
-std::string ReadCheckpointSceneFingerprint(const std::filesystem::path& path);
+// Both fingerprints from one read of the file: the options' (as above) and
+// the scene's (ViewsFingerprint; empty before pano4d stored one).
+struct CheckpointFingerprints {
+  nlohmann::json options;
+  std::string scene;
+};
+CheckpointFingerprints ReadCheckpointFingerprints(
+    const std::filesystem::path& path);
 
 // The scene the views show, as a checkpoint records it: a hash of their
 // names, times, cameras, images, depth and dynamic masks.

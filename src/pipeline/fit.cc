@@ -327,15 +327,15 @@ std::optional<std::string> CheckpointMismatch(
     const Workspace& ws, const FitOptions& used,
     const std::vector<TrainingView>& views) {
   if (!fs::exists(ws.checkpoint())) return "no checkpoint";
-  const nlohmann::json saved = ReadCheckpointFingerprint(ws.checkpoint());
-  if (saved.is_null()) return "the checkpoint records no options";
+  const CheckpointFingerprints saved =
+      ReadCheckpointFingerprints(ws.checkpoint());
+  if (saved.options.is_null()) return "the checkpoint records no options";
   if (const std::optional<JsonDifference> d =
-          FirstDifference(saved, ResumeFingerprint(used))) {
+          FirstDifference(saved.options, ResumeFingerprint(used))) {
     return "option " + d->path + " was " + JsonValueForMessage(d->first) +
            ", now " + JsonValueForMessage(d->second);
   }
-  if (ReadCheckpointSceneFingerprint(ws.checkpoint()) !=
-      ViewsFingerprint(views))
+  if (saved.scene != ViewsFingerprint(views))
     return "the checkpoint was written for other frames";
   return std::nullopt;
 }
