@@ -78,33 +78,35 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
            &adam->second_moment(g)});
     }
   }
-  std::vector<float> counts(grad_count_.begin(), grad_count_.end());
-  arrays.push_back({"densify.gradient", &grad_accum_});
+  const DensifyStatistics& densify = strategy_.statistics();
+  std::vector<float> counts(densify.count.begin(), densify.count.end());
+  arrays.push_back({"densify.gradient", &densify.gradient});
   arrays.push_back({"densify.count", &counts});
-  arrays.push_back({"densify.radius", &max_radius_});
+  arrays.push_back({"densify.radius", &densify.max_radius});
 
   std::ostringstream rng_state;
   rng_state << rng_;
   std::vector<std::string> names;
   for (const TrainingView& v : views_) names.push_back(v.name);
-  nlohmann::json header = {{"format", "pano4d checkpoint 1"},
-                           {"iteration", iteration_},
-                           {"options", options_.ToJson()},
-                           {"fingerprint", fingerprint_},
-                           {"scene", scene_fingerprint_},
-                           {"views", names},
-                           {"rng", rng_state.str()},
-                           {"order", order_},
-                           {"order_pos", order_pos_},
-                           {"reset_done", reset_done_},
-                           {"adam_steps", adams},
-                           {"sh_degree", scene_.statics.sh_degree},
-                           {"num_times", scene_.num_times},
-                           {"canonical_time", scene_.canonical_time},
-                           {"num_bases", scene_.bases.num_bases},
-                           {"counters",
-                            {skipped_rows_total_, skipped_steps_total_,
-                             densified_total_, pruned_total_}}};
+  nlohmann::json header = {
+      {"format", "pano4d checkpoint 1"},
+      {"iteration", iteration_},
+      {"options", options_.ToJson()},
+      {"fingerprint", fingerprint_},
+      {"scene", scene_fingerprint_},
+      {"views", names},
+      {"rng", rng_state.str()},
+      {"order", order_},
+      {"order_pos", order_pos_},
+      {"reset_done", densify.reset_done},
+      {"adam_steps", adams},
+      {"sh_degree", scene_.statics.sh_degree},
+      {"num_times", scene_.num_times},
+      {"canonical_time", scene_.canonical_time},
+      {"num_bases", scene_.bases.num_bases},
+      {"counters",
+       {skipped_rows_total_, skipped_steps_total_, strategy_.densified_total(),
+        strategy_.pruned_total()}}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [name, values] : arrays)
     list.push_back({{"name", name}, {"count", values->size()}});
@@ -387,10 +389,11 @@ void Trainer::Restore(const CheckpointFile& file) {
     adam->set_step(header.at("adam_steps").at(name).get<std::int64_t>());
     adam->RestoreRows();
   }
+  DensifyStatistics& densify = strategy_.statistics();
   std::vector<float> counts;
-  read("densify.gradient", &grad_accum_);
+  read("densify.gradient", &densify.gradient);
   read("densify.count", &counts);
-  read("densify.radius", &max_radius_);
+  read("densify.radius", &densify.max_radius);
   // Visits counted since the last densification: whole, at most one a step.
   for (float c : counts) {
     if (!(c >= 0 && c <= static_cast<float>(iteration) && c == std::floor(c)))
@@ -398,9 +401,10 @@ void Trainer::Restore(const CheckpointFile& file) {
                   "not a count of steps in 0.." + std::to_string(iteration) +
                       " (corrupt checkpoint)");
   }
-  grad_count_.assign(counts.begin(), counts.end());
-  if (grad_accum_.size() != scene_.size() || counts.size() != scene_.size() ||
-      max_radius_.size() != scene_.size()) {
+  densify.count.assign(counts.begin(), counts.end());
+  if (densify.gradient.size() != scene_.size() ||
+      counts.size() != scene_.size() ||
+      densify.max_radius.size() != scene_.size()) {
     throw Error(source, "densify", "", "statistics do not match the model");
   }
   std::istringstream rng_state(header.at("rng").get<std::string>());
@@ -417,15 +421,14 @@ void Trainer::Restore(const CheckpointFile& file) {
     throw Error(source, "order_pos", std::to_string(order_pos_),
                 "past the end of the epoch order (corrupt checkpoint)");
   }
-  reset_done_ = header.at("reset_done").get<bool>();
+  densify.reset_done = header.at("reset_done").get<bool>();
   iteration_ = iteration;
   const std::vector<std::int64_t> counters =
       header.at("counters").get<std::vector<std::int64_t>>();
   if (counters.size() == 4) {
     skipped_rows_total_ = counters[0];
     skipped_steps_total_ = counters[1];
-    densified_total_ = counters[2];
-    pruned_total_ = counters[3];
+    strategy_.set_totals(counters[2], counters[3]);
   }
   UpdateLearningRates();
 }

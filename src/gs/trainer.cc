@@ -62,153 +62,6 @@ std::optional<double> RefinementLoss(const std::vector<float>& rgb,
 
 }  // namespace
 
-std::vector<TrainingView> LoadTrainingViews(
-    const std::vector<WorkspaceFrame>& frames) {
-  std::vector<TrainingView> views(frames.size());
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const WorkspaceFrame& f = frames[i];
-    TrainingView& v = views[i];
-    v.name = f.name;
-    v.time = f.time;
-    v.camera = RasterCamera::FromPosed(f.camera);
-    const int w = v.camera.width, h = v.camera.height;
-    const Image image = ReadImage(f.rgb);
-    if (image.width() != w || image.height() != h) {
-      throw Error(
-          f.rgb.string(), "size",
-          std::to_string(image.width()) + "x" + std::to_string(image.height()),
-          "its camera is " + std::to_string(w) + "x" + std::to_string(h));
-    }
-    const cv::Mat rgb =
-        image.mat().isContinuous() ? image.mat() : image.mat().clone();
-    v.rgb.assign(rgb.ptr<float>(), rgb.ptr<float>() + w * h * 3);
-    if (!f.depth.empty()) {
-      const NpyArray depth = ReadNpy(f.depth);
-      const bool shape_ok = depth.shape.size() >= 2 && depth.shape[0] == h &&
-                            depth.shape[1] == w &&
-                            (depth.shape.size() == 2 ||
-                             (depth.shape.size() == 3 && depth.shape[2] == 1));
-      if (!shape_ok) {
-        std::string shape;
-        for (auto s : depth.shape) {
-          if (!shape.empty()) shape += 'x';
-          shape += std::to_string(s);
-        }
-        throw Error(f.depth.string(), "shape", shape,
-                    "expected " + std::to_string(h) + "x" + std::to_string(w) +
-                        " like the image");
-      }
-      v.depth = depth.ToFloats();
-      for (float& d : v.depth) {
-        if (!std::isfinite(d)) {
-          throw Error(f.depth.string(), "value", std::to_string(d),
-                      "depth maps must be finite (0 marks no depth)");
-        }
-        if (d < 0) d = 0;
-      }
-    }
-    if (!f.dynamic_mask.empty()) {
-      const cv::Mat mask = ReadMask(f.dynamic_mask);
-      if (mask.cols != w || mask.rows != h) {
-        throw Error(
-            f.dynamic_mask.string(), "size",
-            std::to_string(mask.cols) + "x" + std::to_string(mask.rows),
-            "its camera is " + std::to_string(w) + "x" + std::to_string(h));
-      }
-      v.dynamic.resize(static_cast<std::size_t>(w) * h);
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-          v.dynamic[y * w + x] =
-              mask.at<std::uint8_t>(y, x) >= 128 ? kMaskOn : 0;
-    }
-  }
-  return views;
-}
-
-void TrainerOptions::Check() const {
-  const auto positive = [](double v, const char* name) {
-    if (!(v > 0) || !std::isfinite(v)) {
-      throw Error("fit options", name, std::to_string(v), "must be positive");
-    }
-  };
-  const auto non_negative = [](double v, const char* name) {
-    if (!(v >= 0) || !std::isfinite(v)) {
-      throw Error("fit options", name, std::to_string(v),
-                  "must be zero or positive");
-    }
-  };
-  positive(iterations, "iterations");
-  if (!(ssim_weight >= 0 && ssim_weight <= 1)) {
-    throw Error("fit options", "ssim_weight", std::to_string(ssim_weight),
-                "must be in [0, 1]");
-  }
-  non_negative(depth_weight, "depth_weight");
-  non_negative(smoothness_weight, "smoothness_weight");
-  non_negative(anisotropy_weight, "anisotropy_weight");
-  non_negative(normal_weight, "normal_weight");
-  non_negative(hidden_weight, "hidden_weight");
-  non_negative(hidden_thickness, "hidden_thickness");
-  non_negative(appearance_weight, "appearance_weight");
-  positive(normal_tolerance, "normal_tolerance");
-  if (!(max_anisotropy >= 1)) {
-    throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
-                "must be at least 1");
-  }
-  for (auto [v, name] : {std::pair{lr_mean, "lr_mean"},
-                         {lr_log_scale, "lr_log_scale"},
-                         {lr_quat, "lr_quat"},
-                         {lr_opacity, "lr_opacity"},
-                         {lr_sh, "lr_sh"},
-                         {lr_logit, "lr_logit"},
-                         {lr_basis_rotation, "lr_basis_rotation"},
-                         {lr_basis_translation, "lr_basis_translation"},
-                         {lr_appearance, "lr_appearance"}})
-    non_negative(v, name);
-  positive(densify_every, "densify_every");
-  positive(densify_gradient, "densify_gradient");
-  positive(percent_dense, "percent_dense");
-  non_negative(prune_opacity, "prune_opacity");
-  positive(max_screen_radius, "max_screen_radius");
-  positive(opacity_reset_every, "opacity_reset_every");
-  non_negative(max_static_scale_pixels, "max_static_scale_pixels");
-  positive(static_cast<double>(max_gaussians), "max_gaussians");
-}
-
-nlohmann::json TrainerOptions::ToJson() const {
-  return {{"iterations", iterations},
-          {"ssim_weight", ssim_weight},
-          {"depth_weight", depth_weight},
-          {"smoothness_weight", smoothness_weight},
-          {"anisotropy_weight", anisotropy_weight},
-          {"max_anisotropy", max_anisotropy},
-          {"normal_weight", normal_weight},
-          {"normal_tolerance", normal_tolerance},
-          {"hidden_weight", hidden_weight},
-          {"hidden_thickness", hidden_thickness},
-          {"appearance", appearance},
-          {"appearance_weight", appearance_weight},
-          {"lr_appearance", lr_appearance},
-          {"lr_mean", lr_mean},
-          {"lr_log_scale", lr_log_scale},
-          {"lr_quat", lr_quat},
-          {"lr_opacity", lr_opacity},
-          {"lr_sh", lr_sh},
-          {"lr_logit", lr_logit},
-          {"lr_basis_rotation", lr_basis_rotation},
-          {"lr_basis_translation", lr_basis_translation},
-          {"densify_from", densify_from},
-          {"densify_until", densify_until},
-          {"densify_every", densify_every},
-          {"densify_gradient", densify_gradient},
-          {"percent_dense", percent_dense},
-          {"prune_opacity", prune_opacity},
-          {"max_screen_radius", max_screen_radius},
-          {"opacity_reset_every", opacity_reset_every},
-          {"max_gaussians", max_gaussians},
-          {"max_static_scale_pixels", max_static_scale_pixels},
-          {"background", {background.x(), background.y(), background.z()}}};
-}
-
 Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
                  TrainerOptions options, std::uint64_t seed)
     : options_(std::move(options)),
@@ -274,10 +127,7 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
   }
   RegisterGroups();
   UpdateLearningRates();
-  const std::size_t n = scene_.size();
-  grad_accum_.assign(n, 0.0f);
-  max_radius_.assign(n, 0.0f);
-  grad_count_.assign(n, 0);
+  strategy_ = DefaultStrategy(options_, extent_, scene_.size());
 }
 
 void Trainer::RegisterGroups() {
@@ -349,7 +199,7 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out,
                      int appearance_view) {
   const RasterSettings settings = Settings();
   scene_.ComposeAt(time, &composed_);
-  rasterizer_.Forward(composed_, camera, settings, out);
+  rasterizer_.Render(composed_, camera, settings, out);
   if (appearance_view < 0) return;
   if (appearance_view >= static_cast<int>(views_.size())) {
     throw Error(
@@ -362,13 +212,11 @@ void Trainer::Render(const RasterCamera& camera, int time, RenderOutput* out,
 }
 
 void Trainer::Backprop(const RasterCamera& camera, int time,
-                       const RenderOutput& out, const std::vector<float>& d_rgb,
-                       const std::vector<float>& d_depth,
+                       const RasterState& state, const RenderOutput& out,
+                       const RenderGradients& d_out,
                        const GaussianGradients* direct) {
-  const RasterSettings settings = Settings();
-  rasterizer_.BlendBackward(camera, settings, out, d_rgb, d_depth, {},
-                            &grads2d_);
-  rasterizer_.ProjectBackward(composed_, camera, grads2d_, &grads_);
+  rasterizer_.Backward(composed_, camera, Settings(), state, out, d_out,
+                       &grads_);
   const auto add = [](const std::vector<float>& src, std::size_t begin,
                       std::size_t count, std::vector<float>* dst) {
     for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
@@ -436,13 +284,7 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
 }
 
 StepReport Trainer::Step() {
-  // 3DGS resets opacities after iteration k x opacity_reset_every; done at
-  // the start of the next step (the same sequence), so that what is
-  // validated or saved at that iteration is the model before the reset.
-  if (iteration_ > 0 && iteration_ < options_.densify_until &&
-      iteration_ % options_.opacity_reset_every == 0) {
-    ResetOpacities();
-  }
+  strategy_.StepPreForward(iteration_, Optimised());
   StepReport report;
   const RasterSettings settings = Settings();
   const TrainingView& view = views_[NextView()];
@@ -452,7 +294,7 @@ StepReport Trainer::Step() {
   scene_.ComposeAt(view.time, &composed_);
   times_.compose += Since(start);
   start = Clock::now();
-  rasterizer_.Forward(composed_, view.camera, settings, &out_);
+  rasterizer_.Forward(composed_, view.camera, settings, &out_, &state_);
   times_.forward += Since(start);
 
   start = Clock::now();
@@ -465,13 +307,13 @@ StepReport Trainer::Step() {
     rendered = &corrected_;
   }
   const PhotometricLoss photo = ComputePhotometricLoss(
-      *rendered, view.rgb, w, h, options_.ssim_weight, &d_rgb_);
+      *rendered, view.rgb, w, h, options_.ssim_weight, &d_out_.rgb);
   if (options_.appearance) {
     appearance_grads_.assign(appearance_.size(), 0.0f);
     float* d_transform = &appearance_grads_[view_index * kAppearanceWidth];
-    ApplyAppearanceBackward(appearance(view_index), out_.rgb, d_rgb_,
+    ApplyAppearanceBackward(appearance(view_index), out_.rgb, d_out_.rgb,
                             &d_corrected_, d_transform);
-    d_rgb_.swap(d_corrected_);
+    d_out_.rgb.swap(d_corrected_);
     report.appearance = AppearanceRegulariser(
         appearance(view_index), options_.appearance_weight, d_transform);
     // The reference frame keeps the identity: the Gaussians hold its
@@ -489,10 +331,11 @@ StepReport Trainer::Step() {
   }
   mse /= static_cast<double>(out_.rgb.size());
   report.psnr = PsnrFromMse(mse);
-  d_depth_.clear();
+  std::vector<float>& d_depth = d_out_.depth;
+  d_depth.clear();
   const float median = median_depth_[&view - views_.data()];
   if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {
-    d_depth_.assign(view.depth.size(), 0.0f);
+    d_depth.assign(view.depth.size(), 0.0f);
     std::size_t count = 0;
     for (float d : view.depth) count += d > 0;
     double sum = 0;
@@ -502,7 +345,7 @@ StepReport Trainer::Step() {
       if (!(view.depth[p] > 0)) continue;
       const float diff = out_.depth[p] - view.depth[p];
       sum += std::abs(diff);
-      d_depth_[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
+      d_depth[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
     }
     report.depth = options_.depth_weight * sum * scale;
   }
@@ -550,30 +393,20 @@ StepReport Trainer::Step() {
   basis_grads_.rotations.assign(scene_.bases.rotations.size(), 0.0f);
   basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
   const double motion_before = times_.motion;
-  Backprop(view.camera, view.time, out_, d_rgb_, d_depth_, &direct_grads_);
-
-  // Densification statistics: the screen-space gradient of each mean in
-  // NDC units (pixels x size / 2), as 3DGS's threshold assumes.
-  const auto& radius = rasterizer_.projected().radius;
-  for (std::size_t i = 0; i < composed_.size(); ++i) {
-    if (radius[i] <= 0) continue;
-    const float gx = grads_.means2d[i * 2] * 0.5f * w;
-    const float gy = grads_.means2d[i * 2 + 1] * 0.5f * h;
-    grad_accum_[i] += std::sqrt(gx * gx + gy * gy);
-    grad_count_[i] += 1;
-    max_radius_[i] = std::max(max_radius_[i], static_cast<float>(radius[i]));
-  }
+  Backprop(view.camera, view.time, state_, out_, d_out_, &direct_grads_);
+  strategy_.StepPostBackward(state_, grads_);
 
   if (extra_view) {
     if (const ExtraView* extra = extra_view(iteration_)) {
-      RenderOutput extra_out;
       scene_.ComposeAt(extra->time, &composed_);
-      rasterizer_.Forward(composed_, extra->camera, settings, &extra_out);
+      rasterizer_.Forward(composed_, extra->camera, settings, &extra_out_,
+                          &extra_state_);
       if (const std::optional<double> loss =
-              RefinementLoss(extra_out.rgb, *extra, &d_rgb_extra_)) {
+              RefinementLoss(extra_out_.rgb, *extra, &d_extra_.rgb)) {
         report.extra = *loss;
         report.loss += report.extra;
-        Backprop(extra->camera, extra->time, extra_out, d_rgb_extra_, {});
+        Backprop(extra->camera, extra->time, extra_state_, extra_out_,
+                 d_extra_);
       }
     }
   }
@@ -634,13 +467,18 @@ StepReport Trainer::Step() {
   report.iteration = iteration_;
 
   start = Clock::now();
-  const std::int64_t it = iteration_;
-  if (it >= options_.densify_from && it < options_.densify_until &&
-      it % options_.densify_every == 0) {
-    Densify(reset_done_);
-  }
+  strategy_.StepPostOptimise(iteration_, Optimised(), &rng_);
   times_.densify += Since(start);
   return report;
+}
+
+std::int64_t Trainer::AddStaticGaussians(const GaussianModel& extra) {
+  return strategy_.AddStatic(Optimised(), extra);
+}
+
+std::int64_t Trainer::RemoveStaticGaussians(
+    const std::vector<std::uint8_t>& keep) {
+  return strategy_.RemoveStatic(Optimised(), keep);
 }
 
 }  // namespace pano4d

@@ -10,136 +10,16 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/core/frames.h"
 #include "src/gs/adam.h"
 #include "src/gs/appearance.h"
 #include "src/gs/scene.h"
+#include "src/gs/scene_editor.h"
+#include "src/gs/strategy.h"
+#include "src/gs/trainer_options.h"
+#include "src/gs/training_view.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
-
-// A training frame in memory, at the resolution of its camera.
-struct TrainingView {
-  std::string name;
-  int time = 0;
-  RasterCamera camera;
-  std::vector<float> rgb;             // H x W x 3
-  std::vector<float> depth;           // H x W z-depth, 0 = none; may be empty
-  std::vector<std::uint8_t> dynamic;  // H x W, 255 = dynamic; may be empty
-};
-
-// Reads the images, depth maps and dynamic masks of `frames`. Throws
-// pano4d::Error naming the file that is missing, of another size than its
-// camera, or holds NaN.
-std::vector<TrainingView> LoadTrainingViews(
-    const std::vector<WorkspaceFrame>& frames);
-
-// The depth loss' weight on depth the dataset gives (rendered, a depth
-// sensor) and on depth pano4d estimated (stereo, or another tool's maps
-// aligned to the SfM points), whose holes and errors a strong weight would
-// bake into the geometry. The fit chooses by the frames' depth source
-// (ResolveFitOptions, src/pipeline/fit_options.h).
-inline constexpr double kGivenDepthWeight = 5.0;
-
-// The training view whose colours the Gaussians hold (its appearance
-// transform stays the identity; TrainerOptions::appearance).
-inline constexpr std::size_t kAppearanceReferenceView = 0;
-inline constexpr double kEstimatedDepthWeight = 1.0;
-
-struct TrainerOptions {
-  int iterations = 10000;
-  // Losses: (1 - ssim_weight) L1 + ssim_weight D-SSIM on the video; plus
-  // depth_weight times the mean |rendered - given| / median given depth
-  // over pixels with depth; plus the bases' acceleration penalty.
-  double ssim_weight = 0.2;
-  double depth_weight = kEstimatedDepthWeight;
-  double smoothness_weight = 1.0;
-  // Shape regulariser (PhysGaussian's): anisotropy_weight times the mean
-  // over Gaussians of max(0, largest / smallest scale - max_anisotropy).
-  // Needle-like Gaussians fit the training rays and streak across every
-  // other view. 10 rather than 4 since the normal term flattens Gaussians
-  // into discs, which a bound of 4 kept thick
-  // (docs/experiments/2026-11-22-depth-normal-flatness.md).
-  double anisotropy_weight = 0.1;
-  double max_anisotropy = 10.0;
-  // Depth-normal flatness (surface_loss.h): normal_weight times the mean
-  // over the Gaussians on the surface a view's depth map shows (centre
-  // within normal_tolerance, relative, of the depth) of the share of their
-  // variance along the depth map's normal.
-  double normal_weight = 0.1;
-  double normal_tolerance = 0.03;
-  // Hidden depth (surface_loss.h): hidden_weight times the mean over the
-  // dynamic Gaussians inside a view's dynamic mask of
-  // max(0, z / d - 1 - hidden_thickness): a moving object's Gaussians may
-  // not hide deeper behind its visible surface than it is thick
-  // (docs/experiments/2026-11-22-hidden-depth-term.md).
-  double hidden_weight = 1.0;
-  double hidden_thickness = 0.1;
-  // Per-frame appearance (appearance.h): an affine colour transform per
-  // training frame applied to its render before the loss, learned at
-  // lr_appearance and held near the identity by appearance_weight x
-  // (|A - I|^2 + |b|^2); the first training frame (the reference) keeps
-  // the identity, so the Gaussians hold its colours. false: the Gaussians'
-  // colours explain every frame as it is.
-  bool appearance = true;
-  double appearance_weight = 0.1;
-  double lr_appearance = 5e-3;  // decayed as the positions' rates
-  // Learning rates (3DGS's; positions, basis translations times the scene
-  // extent, decayed log-linearly to 1/100 over the run).
-  double lr_mean = 1.6e-4;
-  double lr_log_scale = 5e-3;
-  double lr_quat = 1e-3;
-  double lr_opacity = 5e-2;
-  double lr_sh = 2.5e-3;
-  double lr_logit = 1e-2;
-  double lr_basis_rotation = 1e-4;
-  double lr_basis_translation = 1.6e-4;
-  // Densification (3DGS): every densify_every iterations in
-  // [densify_from, densify_until), Gaussians whose mean screen-space
-  // gradient (in NDC units) exceeds the threshold are cloned when small
-  // (largest scale <= percent_dense x extent) and split in two when large.
-  int densify_from = -1;   // -1: 500 (3DGS's), or half of densify_until
-  int densify_until = -1;  // -1: half the iterations
-  int densify_every = 100;
-  double densify_gradient = 2e-4;
-  double percent_dense = 0.01;
-  // Pruning: opacity below this; after the first opacity reset also screen
-  // radius above max_screen_radius pixels or scale above 0.1 extent.
-  double prune_opacity = 0.005;
-  double max_screen_radius = 20.0;
-  // Opacities are reset to at most 0.01 every this many iterations while
-  // densifying (3DGS), so that floaters can fade and be pruned.
-  int opacity_reset_every = 3000;
-  std::int64_t max_gaussians = 500000;
-  // After every step a static Gaussian's scales are clamped to this many
-  // pixels of the median training view at the median depth (16: the
-  // largest initial scale, 8 voxels of the initialisation); 0: no clamp.
-  // Without it a few static Gaussians grow to tens of voxels, and where one
-  // lies in front of a validation view it veils it. 3DGS prunes such
-  // Gaussians only after its first opacity reset, which a budget of 3000
-  // iterations never reaches
-  // (docs/experiments/2026-11-23-full-resolution-tracks-and-static-scale-clamp.md).
-  double max_static_scale_pixels = 16.0;
-  Eigen::Vector3f background = Eigen::Vector3f::Zero();
-
-  void Check() const;  // throws pano4d::Error naming the field
-  nlohmann::json ToJson() const;
-};
-
-// What the expansion stage adds to a step (DESIGN.md, eq. refine): a view
-// at `camera` and `time` that should look like `target`. The loss is
-//   weight / (3 |mask|) * (sum over the mask of |render - target|^2
-//                          + outside_weight * the same sum outside it),
-// the paper's masked MSE when outside_weight is 0; nothing when the mask is
-// empty.
-struct ExtraView {
-  RasterCamera camera;
-  int time = 0;
-  std::vector<float> target;       // H x W x 3
-  std::vector<std::uint8_t> mask;  // H x W, 255 = M_e (generated content)
-  double weight = 0.1;
-  double outside_weight = 0.0;
-};
 
 struct StepReport {
   std::int64_t iteration = 0;  // after the step
@@ -185,7 +65,9 @@ std::string ViewsFingerprint(const std::vector<TrainingView>& views);
 
 struct CheckpointFile;  // checkpoint.cc
 
-class Trainer {
+// A fit: 3D Gaussian splatting's training loop over the 4D scene. The
+// expansion reaches it only through SceneEditor.
+class Trainer : public SceneEditor {
  public:
   // `seed` draws the training order (each view once per shuffled epoch).
   Trainer(GaussianScene scene, std::vector<TrainingView> views,
@@ -207,7 +89,11 @@ class Trainer {
   // view's camera records them (its appearance transform, when the trainer
   // learns them).
   void Render(const RasterCamera& camera, int time, RenderOutput* out,
-              int appearance_view = -1);
+              int appearance_view);
+  void Render(const RasterCamera& camera, int time,
+              RenderOutput* out) override {
+    Render(camera, time, out, -1);
+  }
   // Training view i's appearance transform (kAppearanceWidth floats; the
   // identity when appearance is off).
   const float* appearance(std::size_t view) const {
@@ -238,39 +124,38 @@ class Trainer {
   // (the fit's resume fingerprint, src/pipeline/fit_options.h).
   void SetFingerprint(nlohmann::json fingerprint);
 
-  // Appends `extra` (the scene's SH degree) to the static Gaussians with
-  // fresh optimiser state (the expansion's Gaussians in unseen regions).
-  // Beyond max_gaussians the rows that do not fit are dropped. Returns the
-  // count added.
-  std::int64_t AddStaticGaussians(const GaussianModel& extra);
-  // Removes the static Gaussians whose `keep` is 0 (one per static row), with
-  // their optimiser state. Counted in pruned_total(). Returns the count.
-  std::int64_t RemoveStaticGaussians(const std::vector<std::uint8_t>& keep);
+  // The expansion's Gaussians in unseen regions, and those it carves, with
+  // their optimiser state (DefaultStrategy::AddStatic / RemoveStatic;
+  // removals count in pruned_total()).
+  std::int64_t AddStaticGaussians(const GaussianModel& extra) override;
+  std::int64_t RemoveStaticGaussians(
+      const std::vector<std::uint8_t>& keep) override;
 
-  const GaussianScene& scene() const { return scene_; }
-  const std::vector<TrainingView>& views() const { return views_; }
+  const GaussianScene& scene() const override { return scene_; }
+  const std::vector<TrainingView>& views() const override { return views_; }
   const TrainerOptions& options() const { return options_; }
   const PhaseTimes& times() const { return times_; }
   double extent() const { return extent_; }
   std::int64_t skipped_rows_total() const { return skipped_rows_total_; }
   std::int64_t skipped_steps_total() const { return skipped_steps_total_; }
-  std::int64_t densified_total() const { return densified_total_; }
-  std::int64_t pruned_total() const { return pruned_total_; }
+  std::int64_t densified_total() const { return strategy_.densified_total(); }
+  std::int64_t pruned_total() const { return strategy_.pruned_total(); }
 
  private:
   void RegisterGroups();
   RasterSettings Settings() const;
   void Restore(const CheckpointFile& file);
   int NextView();
-  void Densify(bool prune_large);
-  void ResetOpacities();
+  OptimisedScene Optimised() {
+    return {&scene_, &static_adam_, &dynamic_adam_};
+  }
   void UpdateLearningRates();
-  // Rasterizer backward from d_rgb and d_depth, plus (when `direct` is
-  // given) the gradients that losses computed directly on the
-  // composed Gaussians, into the static, dynamic and basis gradients.
-  void Backprop(const RasterCamera& camera, int time, const RenderOutput& out,
-                const std::vector<float>& d_rgb,
-                const std::vector<float>& d_depth,
+  // Rasterizer backward of the forward that left `state` and `out` (the
+  // composed model's at `camera`), plus (when `direct` is given) the
+  // gradients that losses computed directly on the composed Gaussians,
+  // into the static, dynamic and basis gradients.
+  void Backprop(const RasterCamera& camera, int time, const RasterState& state,
+                const RenderOutput& out, const RenderGradients& d_out,
                 const GaussianGradients* direct = nullptr);
 
   TrainerOptions options_;
@@ -288,27 +173,27 @@ class Trainer {
   std::vector<float> appearance_;
   int static_mean_group_ = -1, dynamic_mean_group_ = -1,
       basis_translation_group_ = -1;
-  // Densification statistics per Gaussian (static rows, then dynamic).
-  std::vector<float> grad_accum_, max_radius_;
-  std::vector<std::int32_t> grad_count_;
+  // Densification, pruning, opacity resets and the expansion's edits.
+  DefaultStrategy strategy_;
 
   std::mt19937_64 rng_;
   std::vector<int> order_;
   std::size_t order_pos_ = 0;
   std::int64_t iteration_ = 0;
-  bool reset_done_ = false;
 
   // Per-step buffers, reused.
   Rasterizer rasterizer_;
   GaussianModel composed_;
-  RenderOutput out_;
+  // The training view's forward and the refinement view's: the strategy
+  // reads the first after the second has run.
+  RasterState state_, extra_state_;
+  RenderOutput out_, extra_out_;
   GaussianGradients grads_;
   // Gradients of the losses on the composed Gaussians themselves (the
   // flatness and hidden-depth terms): means, log_scales and quats, each
   // empty when no term set it.
   GaussianGradients direct_grads_;
-  ProjectedGradients grads2d_;
-  std::vector<float> d_rgb_, d_depth_, d_rgb_extra_;
+  RenderGradients d_out_, d_extra_;
   std::vector<float> corrected_, d_corrected_, appearance_grads_;
   GaussianGradients static_grads_, dynamic_grads_;
   std::vector<float> logit_grads_;
@@ -316,7 +201,6 @@ class Trainer {
 
   PhaseTimes times_;
   std::int64_t skipped_rows_total_ = 0, skipped_steps_total_ = 0;
-  std::int64_t densified_total_ = 0, pruned_total_ = 0;
 };
 
 }  // namespace pano4d

@@ -125,12 +125,12 @@ cv::Mat ReadDepth(const std::filesystem::path& path,
 }
 
 // The depth `view` is warped with (WarpDepth): z-depth rendered from the
-// trainer's Gaussians where they are opaque enough to trust (kWarpAlpha),
+// fit's Gaussians where they are opaque enough to trust (kWarpAlpha),
 // 0 elsewhere; with kGiven, the view's own depth wherever it has some.
-cv::Mat SourceDepth(Trainer* trainer, const TrainingView& view,
+cv::Mat SourceDepth(SceneEditor* fit, const TrainingView& view,
                     WarpDepth warp_depth, RenderOutput* out) {
   const RasterCamera& camera = view.camera;
-  trainer->Render(camera, view.time, out);
+  fit->Render(camera, view.time, out);
   cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(0));
   for (std::size_t p = 0; p < out->depth.size(); ++p)
     if (out->alpha[p] >= kWarpAlpha)
@@ -284,20 +284,20 @@ Expansion::Expansion(ExpansionOptions options, std::uint64_t seed,
   if (!prior_) throw Error("expansion", "prior", "null", "a prior is needed");
 }
 
-void Expansion::NameViews(const Trainer& trainer,
+void Expansion::NameViews(const SceneEditor& fit,
                           std::vector<ExpandedView>* views) const {
   const std::size_t ns = sources_.size();
   for (std::size_t k = 0; k < views->size(); ++k)
-    (*views)[k].name = trainer.views()[sources_[k % ns].view].name;
+    (*views)[k].name = fit.views()[sources_[k % ns].view].name;
 }
 
 std::filesystem::path Expansion::StepDir(int e) const {
   return out_dir_ / ("step_" + ZeroPadded(e, 2));
 }
 
-void Expansion::Prepare(const Trainer& trainer) {
+void Expansion::Prepare(const SceneEditor& fit) {
   if (prepared_) return;
-  const std::vector<TrainingView>& views = trainer.views();
+  const std::vector<TrainingView>& views = fit.views();
   if (views.empty())
     throw Error("expansion", "views", "0", "no training views");
   std::vector<std::size_t> order(views.size());
@@ -338,7 +338,7 @@ void Expansion::Prepare(const Trainer& trainer) {
     frame_.center = Eigen::Vector3d(c[0], c[1], c[2]);
     for (int i = 0; i < 9; ++i) frame_.r_align(i / 3, i % 3) = r[i];
   } else {
-    const GaussianScene& scene = trainer.scene();
+    const GaussianScene& scene = fit.scene();
     std::vector<Eigen::Vector3f> points;
     for (const GaussianModel* m : {&scene.statics, &scene.dynamics})
       for (std::size_t i = 0; i < m->size(); ++i)
@@ -361,9 +361,9 @@ void Expansion::Prepare(const Trainer& trainer) {
   prepared_ = true;
 }
 
-ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
+ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   const auto start = std::chrono::steady_clock::now();
-  Prepare(*trainer);
+  Prepare(*fit);
   const int directions = options_.geometry.directions;
   const std::size_t ns = sources_.size();
   ExpansionStepReport report;
@@ -379,17 +379,17 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   }
   std::vector<ExpandedView> cams = ExpansionViews(
       options_.geometry, reference_, frame_.center, source_cameras, times, e);
-  NameViews(*trainer, &cams);
+  NameViews(*fit, &cams);
 
   // The sources' warp depth (options' warp_depth), fixed for the whole
   // step.
-  const std::vector<TrainingView>& views = trainer->views();
+  const std::vector<TrainingView>& views = fit->views();
   std::vector<cv::Mat> rgb(ns), depth(ns);
   RenderOutput out;
   for (std::size_t s = 0; s < ns; ++s) {
     const TrainingView& v = views[sources_[s].view];
     rgb[s] = MatView(v.rgb, v.camera.height, v.camera.width, 3);
-    depth[s] = SourceDepth(trainer, v, options_.warp_depth, &out);
+    depth[s] = SourceDepth(fit, v, options_.warp_depth, &out);
   }
   // The sources' moving pixels, for the prior; empty where a view has no
   // dynamic mask.
@@ -465,7 +465,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
                                std::vector<float>(refined_depth.begin<float>(),
                                                   refined_depth.end<float>())));
       if (!options_.gaussian_refinement) continue;
-      trainer->Render(v.camera, v.t, &out);
+      fit->Render(v.camera, v.t, &out);
       const RasterCamera& c = v.camera;
       for (int y = 0; y < c.height; y += options_.new_gaussian_stride) {
         for (int x = 0; x < c.width; x += options_.new_gaussian_stride) {
@@ -502,7 +502,7 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   report.crack_fraction = holes > 0 ? cracks / holes : 0.0;
 
   if (options_.gaussian_refinement) {
-    report.carved = Carve(trainer);
+    report.carved = Carve(fit);
     if (points.size() > 0) {  // checked against this step's views
       const std::vector<SeenDepth> step_views(
           expanded_seen_.end() - static_cast<std::ptrdiff_t>(cams.size()),
@@ -517,10 +517,10 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
     PointCloudFilterOptions filter;
     filter.voxel_size = voxel;
     InitOptions init;
-    init.sh_degree = trainer->scene().statics.sh_degree;
+    init.sh_degree = fit->scene().statics.sh_degree;
     const PointCloud kept = FilterPointCloud(points, filter);
     report.new_gaussians =
-        trainer->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
+        fit->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
   }
   all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
   report.seconds =
@@ -529,15 +529,15 @@ ExpansionStepReport Expansion::RunStep(Trainer* trainer, int e) {
   return report;
 }
 
-std::int64_t Expansion::Carve(Trainer* trainer) {
+std::int64_t Expansion::Carve(SceneEditor* fit) {
   if (views_.empty()) return 0;
-  const GaussianModel& statics = trainer->scene().statics;
+  const GaussianModel& statics = fit->scene().statics;
   if (statics.size() == 0) return 0;
   const std::vector<std::uint8_t> empty = InFreeSpace(
       frames_seen_, expanded_seen_, statics.means.data(), statics.size());
   std::vector<std::uint8_t> keep(empty.size());
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = !empty[i];
-  const std::int64_t removed = trainer->RemoveStaticGaussians(keep);
+  const std::int64_t removed = fit->RemoveStaticGaussians(keep);
   carved_ += removed;
   return removed;
 }
@@ -562,10 +562,10 @@ const ExtraView* Expansion::ViewFor(std::int64_t iteration) {
   return &buffer_;
 }
 
-void Expansion::Reload(const Trainer& trainer, int last_step) {
+void Expansion::Reload(const SceneEditor& fit, int last_step) {
   if (last_step <= 0) return;
   last_step_ = last_step;
-  Prepare(trainer);
+  Prepare(fit);
   const int directions = options_.geometry.directions;
   previous_.assign(directions * sources_.size(), Refined());
   for (int e = options_.one_step ? last_step : 1; e <= last_step; ++e) {
@@ -590,7 +590,7 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
           return t;
         }(),
         e);
-    NameViews(trainer, &cams);
+    NameViews(fit, &cams);
     for (std::size_t k = 0; k < cams.size(); ++k) {
       const ExpandedView& v = cams[k];
       const std::filesystem::path dm =
@@ -616,7 +616,7 @@ void Expansion::Reload(const Trainer& trainer, int last_step) {
 }
 
 std::vector<cv::Mat> Expansion::PanoramicViews(
-    Trainer* trainer, const std::string& name,
+    SceneEditor* fit, const std::string& name,
     const std::vector<RasterCamera>& cameras, const std::vector<int>& times,
     std::string* note) {
   if (last_step_ == 0 || all_cameras_.empty()) {
@@ -629,7 +629,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
         "panoramic views", "times", std::to_string(times.size()),
         "expected one per camera (" + std::to_string(cameras.size()) + ")");
   }
-  const std::vector<TrainingView>& views = trainer->views();
+  const std::vector<TrainingView>& views = fit->views();
   const auto nearest = [](const auto& items, int time, auto time_of) {
     std::size_t best = 0;
     for (std::size_t i = 1; i < items.size(); ++i)
@@ -654,7 +654,7 @@ std::vector<cv::Mat> Expansion::PanoramicViews(
     const TrainingView& v = views[nearest(
         views, times[k], [](const TrainingView& t) { return t.time; })];
     const cv::Mat rgb = MatView(v.rgb, v.camera.height, v.camera.width, 3);
-    const cv::Mat depth = SourceDepth(trainer, v, options_.warp_depth, &out);
+    const cv::Mat depth = SourceDepth(fit, v, options_.warp_depth, &out);
     WarpResult w = ForwardWarp(rgb, depth, v.camera, target);
     if (!v.dynamic.empty())
       clip.moving.push_back(WarpMoving(MovingMask(v), depth, v.camera, target));

@@ -8,7 +8,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core.hpp>
 
-#include "src/gs/trainer.h"
+#include "src/gs/scene_editor.h"
 #include "src/pano/frame.h"
 #include "src/pano/free_space.h"
 #include "src/pano/prior.h"
@@ -101,10 +101,11 @@ struct ExpansionStepReport {
   nlohmann::json ToJson() const;
 };
 
-// Runs expansion steps on a Trainer's current Gaussians and serves the
-// refinement views to its extra_view hook. Products go under `out_dir`
-// (WS/pano4d/expansion): frame.json, step_<e>/dir_<m>/{warped,mask,refined}
-// PNGs and depth .npy named after the source frame, cameras.json per step.
+// Runs expansion steps on a fit's current Gaussians (through SceneEditor)
+// and serves the refinement views to its extra_view hook. Products go under
+// `out_dir` (WS/pano4d/expansion): frame.json,
+// step_<e>/dir_<m>/{warped,mask,refined} PNGs and depth .npy named after the
+// source frame, cameras.json per step.
 class Expansion {
  public:
   // `seed` with the iteration chooses each step's refinement view.
@@ -117,13 +118,13 @@ class Expansion {
   // fills the rest; Gaussians added in M_e where the current ones show
   // nothing (rendered alpha < 0.5) and no training frame saw empty space;
   // refinement views (L_refine on M_e) queued.
-  ExpansionStepReport RunStep(Trainer* trainer, int e);
+  ExpansionStepReport RunStep(SceneEditor* fit, int e);
 
   // Removes the static Gaussians whose centre lies in known empty space
   // (InFreeSpace, free_space.h): seen through by a training frame, or seen
   // by none and seen through by a stored view's warp or by most stored
   // views. Nothing before the first step. Returns the count.
-  std::int64_t Carve(Trainer* trainer);
+  std::int64_t Carve(SceneEditor* fit);
   std::int64_t carved() const { return carved_; }
 
   // The Trainer::extra_view hook: a refinement view for this iteration,
@@ -131,7 +132,7 @@ class Expansion {
   const ExtraView* ViewFor(std::int64_t iteration);
 
   // After --resume: the refinement views of steps 1..last_step as written.
-  void Reload(const Trainer& trainer, int last_step);
+  void Reload(const SceneEditor& fit, int last_step);
 
   // The ablation without Gaussian refinement (the panorama results alone):
   // views at `cameras` (one trajectory, frame k at times[k]) made from the
@@ -145,7 +146,7 @@ class Expansion {
   // messages and the prior's folders). CV_32FC3 RGB per target;
   // `note` gets the prior's note (a fallback's reason), if any. Throws
   // pano4d::Error when no step has run or a product is missing.
-  std::vector<cv::Mat> PanoramicViews(Trainer* trainer, const std::string& name,
+  std::vector<cv::Mat> PanoramicViews(SceneEditor* fit, const std::string& name,
                                       const std::vector<RasterCamera>& cameras,
                                       const std::vector<int>& times,
                                       std::string* note = nullptr);
@@ -158,7 +159,7 @@ class Expansion {
 
  private:
   struct Source {
-    std::size_t view;  // index into the trainer's views
+    std::size_t view;  // index into the fit's views
     RasterCamera camera;
     int time;
   };
@@ -173,9 +174,9 @@ class Expansion {
     cv::Mat rgb;    // CV_32FC3
     cv::Mat depth;  // CV_32FC1
   };
-  void Prepare(const Trainer& trainer);
+  void Prepare(const SceneEditor& fit);
   // Each view named after its source frame (views in ExpansionViews' order).
-  void NameViews(const Trainer& trainer,
+  void NameViews(const SceneEditor& fit,
                  std::vector<ExpandedView>* views) const;
 
   ExpansionOptions options_;

@@ -93,60 +93,60 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
   }
   GaussianModel model;
   Rasterizer rasterizer;
+  RasterState state;
   RenderOutput out;
   scene.ComposeAt(times[0], &model);
-  rasterizer.Forward(model, cameras[0], {}, &out);  // warm-up
+  rasterizer.Forward(model, cameras[0], {}, &out, &state);  // warm-up
   std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
       blend_ms, blend_backward_ms, project_backward_ms;
   std::uint64_t visible = 0, evaluations = 0;
-  ProjectedGradients grad2d;
   GaussianGradients grad;
+  RenderGradients d_out;
   for (int r = 0; r < options.repeats; ++r) {
     const std::size_t v = static_cast<std::size_t>(r) % cameras.size();
     Timer compose;
     scene.ComposeAt(times[v], &model);
     compose_ms.push_back(1e3 * compose.WallSeconds());
     Timer forward;
-    rasterizer.Forward(model, cameras[v], {}, &out);
+    rasterizer.Forward(model, cameras[v], {}, &out, &state);
     forward_ms.push_back(1e3 * forward.WallSeconds());
-    project_ms.push_back(rasterizer.stats().project_ms);
-    bin_ms.push_back(rasterizer.stats().bin_ms);
-    blend_ms.push_back(rasterizer.stats().blend_ms);
-    visible += rasterizer.stats().visible;
-    evaluations += rasterizer.stats().pixel_evaluations;
-    const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), none;
+    project_ms.push_back(state.stats.project_ms);
+    bin_ms.push_back(state.stats.bin_ms);
+    blend_ms.push_back(state.stats.blend_ms);
+    visible += state.stats.visible;
+    evaluations += state.stats.pixel_evaluations;
+    d_out.rgb.assign(out.rgb.size(), 1e-3f);
     Timer backward;
-    rasterizer.BlendBackward(cameras[v], {}, out, d_rgb, none, none, &grad2d);
-    blend_backward_ms.push_back(1e3 * backward.WallSeconds());
-    Timer project_backward;
-    rasterizer.ProjectBackward(model, cameras[v], grad2d, &grad);
-    project_backward_ms.push_back(1e3 * project_backward.WallSeconds());
+    const RasterBackwardStats backward_stats =
+        rasterizer.Backward(model, cameras[v], {}, state, out, d_out, &grad);
     backward_ms.push_back(1e3 * backward.WallSeconds());
+    blend_backward_ms.push_back(backward_stats.blend_ms);
+    project_backward_ms.push_back(backward_stats.project_ms);
   }
   const double f = UpperMedian(forward_ms), b = UpperMedian(backward_ms),
                c = UpperMedian(compose_ms);
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
-  result.rows.push_back({{"workspace", ws.root().string()},
-                         {"gaussians", scene.size()},
-                         {"static", scene.statics.size()},
-                         {"dynamic", scene.dynamics.size()},
-                         {"width", width},
-                         {"height", height},
-                         {"threads", threads},
-                         {"compose_ms", c},
-                         {"forward_ms", f},
-                         {"project_ms", UpperMedian(project_ms)},
-                         {"bin_ms", UpperMedian(bin_ms)},
-                         {"blend_ms", UpperMedian(blend_ms)},
-                         {"blend_backward_ms", UpperMedian(blend_backward_ms)},
-                         {"project_backward_ms",
-                          UpperMedian(project_backward_ms)},
-                         {"forward_backward_ms", f + b},
-                         {"fps", 1e3 / f},
-                         {"visible", visible / options.repeats},
-                         {"pixel_evaluations_per_s",
-                          evaluations / (1e-3 * f * options.repeats)}});
+  result.rows.push_back(
+      {{"workspace", ws.root().string()},
+       {"gaussians", scene.size()},
+       {"static", scene.statics.size()},
+       {"dynamic", scene.dynamics.size()},
+       {"width", width},
+       {"height", height},
+       {"threads", threads},
+       {"compose_ms", c},
+       {"forward_ms", f},
+       {"project_ms", UpperMedian(project_ms)},
+       {"bin_ms", UpperMedian(bin_ms)},
+       {"blend_ms", UpperMedian(blend_ms)},
+       {"blend_backward_ms", UpperMedian(blend_backward_ms)},
+       {"project_backward_ms", UpperMedian(project_backward_ms)},
+       {"forward_backward_ms", f + b},
+       {"fps", 1e3 / f},
+       {"visible", visible / options.repeats},
+       {"pixel_evaluations_per_s",
+        evaluations / (1e-3 * f * options.repeats)}});
   result.table = StringPrintf(
       "pano4d %s bench render: the fitted scene of %s (%zu static, %zu "
       "dynamic Gaussians) from its %zu training cameras at their times; "
@@ -250,29 +250,28 @@ BenchResult RunBenchRender(const BenchRenderOptions& options) {
       const GaussianModel model =
           RandomViewFillingScene(static_cast<std::size_t>(n), camera, 4.0f, 1);
       Rasterizer rasterizer;
+      RasterState state;
       RenderOutput out;
-      rasterizer.Forward(model, camera, {},
-                         &out);  // warm-up: buffers reach their size
+      // Warm-up: buffers reach their size.
+      rasterizer.Forward(model, camera, {}, &out, &state);
       std::vector<double> ms;
       for (int r = 0; r < options.repeats; ++r) {
         Timer timer;
-        rasterizer.Forward(model, camera, {}, &out);
+        rasterizer.Forward(model, camera, {}, &out, &state);
         ms.push_back(1e3 * timer.WallSeconds());
       }
       const double forward_ms = UpperMedian(ms);
-      const RasterStats stats = rasterizer.stats();
+      const RasterStats stats = state.stats;
       // Forward + backward with a fixed gradient on every output, as a
       // photometric loss would give.
-      const std::vector<float> d_rgb(out.rgb.size(), 1e-3f), d_depth, d_alpha;
-      ProjectedGradients grad2d;
+      RenderGradients d_out;
+      d_out.rgb.assign(out.rgb.size(), 1e-3f);
       GaussianGradients grad;
       std::vector<double> ms_fb;
       for (int r = 0; r < options.repeats; ++r) {
         Timer timer;
-        rasterizer.Forward(model, camera, {}, &out);
-        rasterizer.BlendBackward(camera, {}, out, d_rgb, d_depth, d_alpha,
-                                 &grad2d);
-        rasterizer.ProjectBackward(model, camera, grad2d, &grad);
+        rasterizer.Forward(model, camera, {}, &out, &state);
+        rasterizer.Backward(model, camera, {}, state, out, d_out, &grad);
         ms_fb.push_back(1e3 * timer.WallSeconds());
       }
       const double forward_backward_ms = UpperMedian(ms_fb);

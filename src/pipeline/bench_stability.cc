@@ -74,16 +74,16 @@ struct CaseResult {
 int RenderBothWays(const GaussianModel& model, const RasterCamera& camera,
                    Count* count, double* mean_alpha) {
   Rasterizer r;
+  RasterState state;
   RenderOutput out;
-  r.Forward(model, camera, RasterSettings{}, &out);
+  r.Forward(model, camera, RasterSettings{}, &out, &state);
   count->Add(out.rgb);
   count->Add(out.depth);
   count->Add(out.alpha);
-  ProjectedGradients g2;
-  r.BlendBackward(camera, RasterSettings{}, out,
-                  std::vector<float>(out.rgb.size(), 1.0f), {}, {}, &g2);
+  RenderGradients d_out;
+  d_out.rgb.assign(out.rgb.size(), 1.0f);
   GaussianGradients g;
-  r.ProjectBackward(model, camera, g2, &g);
+  r.Backward(model, camera, RasterSettings{}, state, out, d_out, &g);
   count->Add(g.means);
   count->Add(g.log_scales);
   count->Add(g.quats);
@@ -93,7 +93,7 @@ int RenderBothWays(const GaussianModel& model, const RasterCamera& camera,
   for (float a : out.alpha) alpha += a;
   *mean_alpha = alpha / std::max<std::size_t>(1, out.alpha.size());
   int rendered = 0;
-  for (int radius : r.projected().radius) rendered += radius > 0;
+  for (int radius : state.projected.radius) rendered += radius > 0;
   return rendered;
 }
 

@@ -61,7 +61,7 @@ cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
     scene_.ComposeAt(time, &posed_);
     posed_time_ = time;
   }
-  rasterizer_.Forward(posed_, camera, RasterSettings{}, &out_);
+  rasterizer_.Render(posed_, camera, RasterSettings{}, &out_);
   cv::Mat rgb(out_.height, out_.width, CV_32FC3);
   std::copy(out_.rgb.begin(), out_.rgb.end(), rgb.ptr<float>());
   for (float v : out_.rgb) {

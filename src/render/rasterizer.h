@@ -1,5 +1,13 @@
 #pragma once
-
+// The CPU rasterizer of 3D Gaussian splatting, in gsplat's stages:
+//   projection            ProjectionForward / ProjectionBackward
+//                         (projection.h; its arithmetic in ewa.h)
+//   tile intersection     IntersectTiles (tile_intersection.h)
+//   rasterize to pixels   RasterizeToPixelsForward / ...Backward
+//                         (rasterize_to_pixels.h)
+// RasterizerT composes them: Forward returns the forward's state (a
+// RasterStateT the caller keeps) and Backward takes it, checked against the
+// model and camera it is given.
 #include <cstdint>
 #include <vector>
 
@@ -55,6 +63,13 @@ struct RenderOutputT {
   std::vector<T> alpha;  // H x W, accumulated opacity
 };
 
+// Gradients of a loss with respect to a RenderOutputT, in its layout; an
+// empty vector means zero.
+template <typename T>
+struct RenderGradientsT {
+  std::vector<T> rgb, depth, alpha;
+};
+
 // The per-Gaussian result of projection, structure of arrays. A culled
 // Gaussian has radius 0.
 template <typename T>
@@ -74,9 +89,10 @@ struct ProjectedGaussiansT {
   std::vector<int> tile_x0, tile_y0, tile_x1, tile_y1;
   std::vector<std::uint8_t> clamped;  // N x 3: SH colour hit max(0, .)
   void Resize(std::size_t n);
+  std::size_t size() const { return radius.size(); }
 };
 
-// Counts from the last forward pass, for benchmarks.
+// Counts and stage times of one forward pass, for benchmarks.
 struct RasterStats {
   std::uint64_t visible = 0;            // Gaussians that survived projection
   std::uint64_t tile_entries = 0;       // (Gaussian, tile) pairs
@@ -85,8 +101,31 @@ struct RasterStats {
   double project_ms = 0, bin_ms = 0, blend_ms = 0;
 };
 
+// Wall time of a backward's stages, milliseconds.
+struct RasterBackwardStats {
+  double blend_ms = 0, project_ms = 0;
+};
+
+// What a forward pass saves for its backward (gsplat's saved tensors).
+// Backward checks that it belongs to the model and camera it is given.
+template <typename T>
+struct RasterStateT {
+  int width = 0, height = 0;
+  ProjectedGaussiansT<T> projected;  // one per Gaussian of the model
+  // Gaussian of each (tile, Gaussian) entry, sorted by tile, then depth,
+  // then index: a total order.
+  std::vector<std::uint32_t> sorted_ids;
+  // [begin, end) into sorted_ids for each tile: 2 per tile, row-major.
+  std::vector<std::uint32_t> tile_ranges;
+  std::vector<T> final_transmittance;  // per pixel
+  // Per pixel: one past the last entry of its tile that blended into it.
+  std::vector<std::uint32_t> last_contributor;
+  RasterStats stats;
+  std::size_t gaussians() const { return projected.size(); }
+};
+
 // Gradients of a loss with respect to the projected (2D) Gaussians: what
-// the blend backward produces and the projection backward consumes.
+// the rasterization backward produces and the projection backward consumes.
 template <typename T>
 struct ProjectedGradientsT {
   std::vector<T> x, y;                       // pixel position of the mean
@@ -107,76 +146,70 @@ struct GaussianGradientsT {
   void Assign(const GaussianModelT<T>& model);  // zeros, sized like the model
 };
 
-// A tiled CPU rasterizer. Buffers live in the object and are reused, so
-// steady-state rendering does not allocate. Results, gradients included, do
-// not depend on the number of threads: tiles are independent, the sort is
-// total and per-entry gradients are reduced in order.
+// The radix sort's buffers of the tile intersection, reused between calls.
+struct TileSortBuffers {
+  std::vector<std::uint64_t> keys, key_scratch;
+  std::vector<std::uint32_t> id_scratch, offsets;
+};
+
+// The stages composed, with the scratch buffers that make steady-state
+// rendering allocation-free. Results, gradients included, do not depend on
+// the number of threads: tiles are independent, the sort is total and
+// per-entry gradients are reduced in order.
 template <typename T>
 class RasterizerT {
  public:
-  // Bins and blends given projected Gaussians (the 2D stage alone, e.g. to
-  // check its gradients by finite differences); Forward is Project + this.
-  void ForwardProjected(const ProjectedGaussiansT<T>& projected,
+  // Renders `model` at `camera` into *out; *state receives what Backward
+  // needs (reuse one state per pass that will be differentiated).
+  void Forward(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
+               const RasterSettingsT<T>& settings, RenderOutputT<T>* out,
+               RasterStateT<T>* state);
+
+  // Gradients of the loss with respect to `model`'s parameters, given its
+  // gradients with respect to Forward's outputs. `state` and `out` must be
+  // Forward's for this model and camera: a state of another number of
+  // Gaussians or image size, or gradients of another size than the image,
+  // throw pano4d::Error naming both sizes.
+  RasterBackwardStats Backward(const GaussianModelT<T>& model,
+                               const RasterCameraT<T>& camera,
+                               const RasterSettingsT<T>& settings,
+                               const RasterStateT<T>& state,
+                               const RenderOutputT<T>& out,
+                               const RenderGradientsT<T>& d_out,
+                               GaussianGradientsT<T>* grad);
+
+  // Forward whose state is not kept: for renders no backward follows.
+  void Render(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
+              const RasterSettingsT<T>& settings, RenderOutputT<T>* out);
+
+  // The 2D stages alone (tile intersection and rasterization) on given
+  // projected Gaussians, and their backward to the projected Gaussians:
+  // to check those gradients by finite differences.
+  void RasterizeForward(const ProjectedGaussiansT<T>& projected,
                         const RasterCameraT<T>& camera,
                         const RasterSettingsT<T>& settings,
-                        RenderOutputT<T>* out);
-
-  // The blend's backward, from the last forward's saved state (final
-  // transmittance, last contributor, sorted ids): gradients of the loss with
-  // respect to each projected Gaussian, given its gradients with respect to
-  // the outputs (H x W x 3, H x W, H x W; an empty vector means zero).
-  // Deterministic whatever the thread count: per-entry gradients are
-  // reduced in entry order.
-  void BlendBackward(const RasterCameraT<T>& camera,
-                     const RasterSettingsT<T>& settings,
-                     const RenderOutputT<T>& out, const std::vector<T>& d_rgb,
-                     const std::vector<T>& d_depth,
-                     const std::vector<T>& d_alpha,
-                     ProjectedGradientsT<T>* grad);
-
-  // The projection's backward: from the 2D gradients of BlendBackward to
-  // the model's parameters. `model` and `camera` must be the last forward's;
-  // a model or 2D gradients of another size than that forward's throw
-  // pano4d::Error naming both sizes.
-  void ProjectBackward(const GaussianModelT<T>& model,
-                       const RasterCameraT<T>& camera,
-                       const ProjectedGradientsT<T>& grad2d,
-                       GaussianGradientsT<T>* grad) const;
-
-  void Forward(const GaussianModelT<T>& model, const RasterCameraT<T>& camera,
-               const RasterSettingsT<T>& settings, RenderOutputT<T>* out);
-
-  // Forward state kept for the backward pass.
-  const ProjectedGaussiansT<T>& projected() const { return projected_; }
-  const std::vector<T>& final_transmittance() const { return final_t_; }
-  const std::vector<std::uint32_t>& last_contributor() const { return last_; }
-  const std::vector<std::uint32_t>& sorted_ids() const { return ids_; }
-  // [begin, end) into sorted_ids() for each tile.
-  const std::vector<std::uint32_t>& tile_ranges() const { return ranges_; }
-  const RasterStats& stats() const { return stats_; }
+                        RenderOutputT<T>* out, RasterStateT<T>* state);
+  void RasterizeBackward(const RasterCameraT<T>& camera,
+                         const RasterSettingsT<T>& settings,
+                         const RasterStateT<T>& state,
+                         const RenderOutputT<T>& out,
+                         const RenderGradientsT<T>& d_out,
+                         ProjectedGradientsT<T>* grad2d);
 
  private:
-  void Project(const GaussianModelT<T>& model, const RasterCameraT<T>& camera);
-  void Bin(const RasterCameraT<T>& camera);
-  void Blend(const RasterCameraT<T>& camera, const RasterSettingsT<T>& settings,
-             RenderOutputT<T>* out);
+  void Intersect(const RasterCameraT<T>& camera, RasterStateT<T>* state);
 
-  ProjectedGaussiansT<T> projected_;
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> ids_;
-  std::vector<std::uint64_t> key_scratch_;  // radix sort buffers
-  std::vector<std::uint32_t> scratch_;      // ids being permuted
-  std::vector<std::uint32_t> offsets_;
-  std::vector<std::uint32_t> ranges_;
-  std::vector<T> final_t_;
-  std::vector<std::uint32_t> last_;
-  RasterStats stats_;
-  std::vector<T> entry_grads_;  // blend backward: 10 per (tile, Gaussian) entry
+  TileSortBuffers sort_;
+  std::vector<T> entry_grads_;  // rasterization backward, per entry
+  ProjectedGradientsT<T> grad2d_;
+  RasterStateT<T> render_state_;  // Render's
 };
 
 using RasterSettings = RasterSettingsT<float>;
 using RenderOutput = RenderOutputT<float>;
+using RenderGradients = RenderGradientsT<float>;
 using ProjectedGaussians = ProjectedGaussiansT<float>;
+using RasterState = RasterStateT<float>;
 using Rasterizer = RasterizerT<float>;
 using ProjectedGradients = ProjectedGradientsT<float>;
 using GaussianGradients = GaussianGradientsT<float>;

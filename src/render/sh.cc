@@ -94,6 +94,29 @@ Eigen::Matrix<T, 3, 1> ShColor(int degree, const T* coeffs,
   return color;
 }
 
+template <typename T>
+Eigen::Matrix<T, 3, 1> ShColorVjp(int degree, const T* coeffs,
+                                  const Eigen::Matrix<T, 3, 1>& view,
+                                  const T* d_color, T* d_coeffs) {
+  using Vec3 = Eigen::Matrix<T, 3, 1>;
+  const Vec3 dir = view.normalized();
+  T basis[16], d_basis[48];
+  ShBasis(degree, dir, basis);
+  ShBasisGradient(degree, dir, d_basis);
+  const int k_count = (degree + 1) * (degree + 1);
+  Vec3 d_dir = Vec3::Zero();
+  for (int k = 0; k < k_count; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      d_coeffs[3 * k + c] = basis[k] * d_color[c];
+      d_dir += Vec3(d_basis[3 * k], d_basis[3 * k + 1], d_basis[3 * k + 2]) *
+               coeffs[3 * k + c] * d_color[c];
+    }
+  }
+  // Through the normalisation dir = view / |view|.
+  return (Eigen::Matrix<T, 3, 3>::Identity() - dir * dir.transpose()) * d_dir /
+         view.norm();
+}
+
 template void ShBasis<float>(int, const Eigen::Matrix<float, 3, 1>&, float*);
 template void ShBasis<double>(int, const Eigen::Matrix<double, 3, 1>&, double*);
 template void ShBasisGradient<float>(int, const Eigen::Matrix<float, 3, 1>&,
@@ -104,5 +127,10 @@ template Eigen::Matrix<float, 3, 1> ShColor<float>(
     int, const float*, const Eigen::Matrix<float, 3, 1>&, bool*);
 template Eigen::Matrix<double, 3, 1> ShColor<double>(
     int, const double*, const Eigen::Matrix<double, 3, 1>&, bool*);
+template Eigen::Matrix<float, 3, 1> ShColorVjp<float>(
+    int, const float*, const Eigen::Matrix<float, 3, 1>&, const float*, float*);
+template Eigen::Matrix<double, 3, 1> ShColorVjp<double>(
+    int, const double*, const Eigen::Matrix<double, 3, 1>&, const double*,
+    double*);
 
 }  // namespace pano4d

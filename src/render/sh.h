@@ -29,4 +29,13 @@ Eigen::Matrix<T, 3, 1> ShColor(int degree, const T* coeffs,
                                const Eigen::Matrix<T, 3, 1>& dir,
                                bool* clamped = nullptr);
 
+// ShColor's backward: d_color (3; zero for a channel the clamp held at 0)
+// -> d_coeffs (K x 3, written), and the returned gradient with respect to
+// the unnormalised view vector (the Gaussian's mean minus the camera
+// centre) that ShColor's direction was normalised from.
+template <typename T>
+Eigen::Matrix<T, 3, 1> ShColorVjp(int degree, const T* coeffs,
+                                  const Eigen::Matrix<T, 3, 1>& view,
+                                  const T* d_color, T* d_coeffs);
+
 }  // namespace pano4d

@@ -203,7 +203,7 @@ Silhouette SideView(const GaussianScene& scene, const SideCamera& side) {
     composed.opacities[i] = InverseSigmoid(0.99f);
   Rasterizer rasterizer;
   RenderOutput out;
-  rasterizer.Forward(composed, RasterCamera::FromPosed(side.camera), {}, &out);
+  rasterizer.Render(composed, RasterCamera::FromPosed(side.camera), {}, &out);
 
   cv::Mat near_mask;
   cv::dilate(side.moving, near_mask,

@@ -44,7 +44,7 @@ std::vector<TrainingView> RenderViews(const GaussianScene& teacher,
     v.time = times[i];
     v.camera = CameraAt(offsets[i]);
     teacher.ComposeAt(v.time, &composed);
-    rasterizer.Forward(composed, v.camera, {}, &out);
+    rasterizer.Render(composed, v.camera, {}, &out);
     v.rgb = out.rgb;
     v.depth = out.depth;
     for (std::size_t p = 0; p < v.depth.size(); ++p)
@@ -303,8 +303,7 @@ TEST(TrainerTest, CheckpointOfAnotherSceneCorruptOrEditedIsRefusedByName) {
   // The same frame names over other pixels: another scene.
   std::vector<TrainingView> other = views;
   other[1].rgb[5] += 0.25f;
-  EXPECT_NE(load(other, bytes).find("a.ckpt: field 'scene'"),
-            std::string::npos)
+  EXPECT_NE(load(other, bytes).find("a.ckpt: field 'scene'"), std::string::npos)
       << load(other, bytes);
   other = views;
   other[0].camera.translation.x() += 0.01f;
@@ -317,10 +316,10 @@ TEST(TrainerTest, CheckpointOfAnotherSceneCorruptOrEditedIsRefusedByName) {
     EXPECT_NE(load(views, flipped).find("checksum"), std::string::npos) << at;
   }
   // Cut short: named as such, not a crash.
-  EXPECT_NE(load(views, std::vector<std::uint8_t>(bytes.begin(),
-                                                  bytes.begin() + 12))
-                .find("too short"),
-            std::string::npos);
+  EXPECT_NE(
+      load(views, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 12))
+          .find("too short"),
+      std::string::npos);
 
   // A header edited with its checksum made to match: the iteration is
   // bounded by the run's, the optimisers' steps by the iteration.
@@ -338,9 +337,9 @@ TEST(TrainerTest, CheckpointOfAnotherSceneCorruptOrEditedIsRefusedByName) {
   EXPECT_NE(load(views, edited("\"static\":3", "\"static\":-2"))
                 .find("adam_steps.static"),
             std::string::npos);
-  EXPECT_NE(load(views, edited("\"scene\":\"", "\"scene\":\"0"))
-                .find("'scene'"),
-            std::string::npos);
+  EXPECT_NE(
+      load(views, edited("\"scene\":\"", "\"scene\":\"0")).find("'scene'"),
+      std::string::npos);
 }
 
 TEST(TrainerTest, DensificationRespectsTheCap) {

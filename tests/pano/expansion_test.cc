@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <numeric>
 #include <optional>
 #include <set>
 
@@ -13,6 +14,7 @@
 #include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/npy.h"
+#include "src/gs/trainer.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 #include "tests/support/test_files.h"
@@ -56,7 +58,7 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false, bool moving = false,
     v.name = "f" + std::to_string(t);
     v.time = t;
     v.camera = CameraAt(0.1f * t);
-    rasterizer.Forward(scene.statics, v.camera, {}, &out);
+    rasterizer.Render(scene.statics, v.camera, {}, &out);
     v.rgb = out.rgb;
     v.depth = out.depth;
     for (float& d : v.depth) d *= given_depth_scale;
@@ -184,6 +186,60 @@ TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   EXPECT_GT(r2.prefilled_fraction, 0.0);
   EXPECT_EQ(expansion.refinement_views(), 16u);
   EXPECT_EQ(expansion.cameras().size(), 16u);
+}
+
+// The expansion needs only SceneEditor: over a bare scene (no trainer, no
+// optimiser) a step makes the same views and Gaussians as over a Trainer
+// holding that scene.
+class BareScene : public SceneEditor {
+ public:
+  BareScene(GaussianScene scene, std::vector<TrainingView> views)
+      : scene_(std::move(scene)), views_(std::move(views)) {}
+  void Render(const RasterCamera& camera, int time,
+              RenderOutput* out) override {
+    ++renders;
+    scene_.ComposeAt(time, &composed_);
+    rasterizer_.Render(composed_, camera, {}, out);
+  }
+  const std::vector<TrainingView>& views() const override { return views_; }
+  const GaussianScene& scene() const override { return scene_; }
+  std::int64_t AddStaticGaussians(const GaussianModel& extra) override {
+    std::vector<std::uint32_t> rows(extra.size());
+    std::iota(rows.begin(), rows.end(), 0u);
+    AppendGaussianRows(extra, rows, &scene_.statics);
+    return static_cast<std::int64_t>(extra.size());
+  }
+  std::int64_t RemoveStaticGaussians(
+      const std::vector<std::uint8_t>& keep) override {
+    const std::size_t before = scene_.statics.size();
+    KeepGaussianRows(keep, &scene_.statics);
+    return static_cast<std::int64_t>(before - scene_.statics.size());
+  }
+  int renders = 0;
+
+ private:
+  GaussianScene scene_;
+  std::vector<TrainingView> views_;
+  Rasterizer rasterizer_;
+  GaussianModel composed_;
+};
+
+TEST(ExpansionTest, RunsOnAnySceneEditorAsOnATrainer) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer();
+  BareScene bare(trainer->scene(), trainer->views());
+  GeometryPrior prior;
+  Expansion on_trainer(SmallOptions(), /*seed=*/0, dir / "trainer", &prior);
+  Expansion on_bare(SmallOptions(), /*seed=*/0, dir / "bare", &prior);
+  const ExpansionStepReport a = on_trainer.RunStep(trainer.get(), 1);
+  const ExpansionStepReport b = on_bare.RunStep(&bare, 1);
+  EXPECT_GT(bare.renders, 0);
+  EXPECT_GT(b.new_gaussians, 0);
+  EXPECT_EQ(a.new_gaussians, b.new_gaussians);
+  EXPECT_EQ(a.carved, b.carved);
+  EXPECT_DOUBLE_EQ(a.hole_fraction, b.hole_fraction);
+  EXPECT_EQ(bare.scene().statics.means, trainer->scene().statics.means);
+  EXPECT_EQ(on_bare.ViewFor(3)->target, on_trainer.ViewFor(3)->target);
 }
 
 TEST(ExpansionTest, ReloadServesTheSameViewsAsTheRunThatWroteThem) {

@@ -25,7 +25,7 @@ std::vector<TrainingView> Views(int count) {
     v.time = t;
     v.camera = BenchCamera(48, 36);
     v.camera.translation.x() = -0.05f * t;
-    rasterizer.Forward(scene, v.camera, {}, &out);
+    rasterizer.Render(scene, v.camera, {}, &out);
     v.rgb = out.rgb;
     v.depth = out.depth;
     views.push_back(std::move(v));

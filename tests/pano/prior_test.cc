@@ -508,15 +508,15 @@ TEST(CommandPriorTest, WithoutAFallbackAFailureIsAnError) {
 TEST(CommandPriorTest, AHangingCommandIsStoppedAtItsTimeLimitWithItsChildren) {
   testing::TempDir dir;
   const fs::path pid_file = dir / "sleep.pid";
-  CommandPrior prior("sleep 60 & echo $! > '" + pid_file.string() +
-                         "'; wait # {in} {out}",
-                     dir / "work", std::make_unique<GeometryPrior>(),
-                     /*timeout_seconds=*/0.5);
+  CommandPrior prior(
+      "sleep 60 & echo $! > '" + pid_file.string() + "'; wait # {in} {out}",
+      dir / "work", std::make_unique<GeometryPrior>(),
+      /*timeout_seconds=*/0.5);
   const auto start = std::chrono::steady_clock::now();
   const PriorResult result = prior.Fill(HoleClip());
-  const double seconds = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now() - start)
-                             .count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   EXPECT_EQ(result.prior, "geometry");
   EXPECT_NE(result.note.find("stopped at its time limit of 0.5 s"),
             std::string::npos)

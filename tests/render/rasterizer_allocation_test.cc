@@ -30,17 +30,16 @@ TEST(RasterizerAllocationTest, WarmForwardAndBackwardDoNotAllocate) {
   const RasterCamera camera = BenchCamera(160, 120);
   const GaussianModel model = RandomViewFillingScene(20000, camera, 4, 7);
   Rasterizer rasterizer;
+  RasterState state;
   RenderOutput out;
-  ProjectedGradients grad2d;
   GaussianGradients grad;
-  std::vector<float> d_rgb, d_depth, d_alpha;
+  RenderGradients d_out;
   const auto step = [&] {
-    rasterizer.Forward(model, camera, {}, &out);
-    d_rgb.assign(out.rgb.size(), 0.1f);
-    d_depth.assign(out.depth.size(), 0.01f);
-    d_alpha.assign(out.alpha.size(), -0.2f);
-    rasterizer.BlendBackward(camera, {}, out, d_rgb, d_depth, d_alpha, &grad2d);
-    rasterizer.ProjectBackward(model, camera, grad2d, &grad);
+    rasterizer.Forward(model, camera, {}, &out, &state);
+    d_out.rgb.assign(out.rgb.size(), 0.1f);
+    d_out.depth.assign(out.depth.size(), 0.01f);
+    d_out.alpha.assign(out.alpha.size(), -0.2f);
+    rasterizer.Backward(model, camera, {}, state, out, d_out, &grad);
   };
   step();  // sizes every buffer
   step();

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/render/projection.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -14,9 +15,9 @@ namespace {
 
 using Rd = RasterizerT<double>;
 
-// A loss that weights every output: L = sum w_rgb rgb + w_d depth + w_a alpha.
-struct Weights {
-  std::vector<double> rgb, depth, alpha;
+// A loss that weights every output: L = sum w_rgb rgb + w_d depth + w_a alpha;
+// the weights are its gradient with respect to the outputs.
+struct Weights : RenderGradientsT<double> {
   // Weights in [-1, 1] (depth in [-0.3, 0.3]) for every output of `out`.
   static Weights Random(const RenderOutputT<double>& out, std::mt19937& rng) {
     std::uniform_real_distribution<double> u(-1, 1);
@@ -103,15 +104,15 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
   for (unsigned seed : {1u, 2u, 3u}) {
     const GaussianModelT<double> model = Scene(seed, 24);
     Rd rasterizer;
+    RasterStateT<double> state;
     RenderOutputT<double> out;
-    rasterizer.Forward(model, camera, settings, &out);
-    const ProjectedGaussiansT<double> projected = rasterizer.projected();
+    rasterizer.Forward(model, camera, settings, &out, &state);
+    const ProjectedGaussiansT<double> projected = state.projected;
     std::mt19937 rng(seed + 10);
     const Weights w = Weights::Random(out, rng);
-    rasterizer.ForwardProjected(projected, camera, settings, &out);
+    rasterizer.RasterizeForward(projected, camera, settings, &out, &state);
     ProjectedGradientsT<double> grad;
-    rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
-                             &grad);
+    rasterizer.RasterizeBackward(camera, settings, state, out, w, &grad);
 
     using Field = std::vector<double> ProjectedGaussiansT<double>::*;
     using GradField = std::vector<double> ProjectedGradientsT<double>::*;
@@ -138,7 +139,8 @@ TEST(RasterizerBackwardTest, BlendGradientsMatchCentralDifferences) {
         const double numeric = CentralDifference(
             projected, field, g, [&](const ProjectedGaussiansT<double>& q) {
               RenderOutputT<double> o;
-              Rd().ForwardProjected(q, camera, settings, &o);
+              RasterStateT<double> s;
+              Rd().RasterizeForward(q, camera, settings, &o, &s);
               return w.Loss(o);
             });
         tally.Add((grad.*grad_field)[g], numeric,
@@ -171,14 +173,12 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
     std::uniform_real_distribution<double> u(-1, 1);
     for (double& c : model.sh) c = 0.4 * u(rng);
     Rd rasterizer;
+    RasterStateT<double> state;
     RenderOutputT<double> out;
-    rasterizer.Forward(model, camera, settings, &out);
+    rasterizer.Forward(model, camera, settings, &out, &state);
     const Weights w = Weights::Random(out, rng);
-    ProjectedGradientsT<double> grad2d;
-    rasterizer.BlendBackward(camera, settings, out, w.rgb, w.depth, w.alpha,
-                             &grad2d);
     GaussianGradientsT<double> grad;
-    rasterizer.ProjectBackward(model, camera, grad2d, &grad);
+    rasterizer.Backward(model, camera, settings, state, out, w, &grad);
 
     const std::vector<
         std::pair<std::string, std::vector<double> GaussianModelT<double>::*>>
@@ -198,7 +198,7 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
         const double numeric = CentralDifference(
             model, field, k, [&](const GaussianModelT<double>& m) {
               RenderOutputT<double> o;
-              Rd().Forward(m, camera, settings, &o);
+              Rd().Render(m, camera, settings, &o);
               return w.Loss(o);
             });
         tally.Add((*analytic.at(name))[k], numeric,
@@ -213,23 +213,62 @@ TEST(RasterizerBackwardTest, ModelGradientsMatchCentralDifferences) {
   EXPECT_GT(tally.checked, 1000);
 }
 
-// A backward given another model than the last forward's is refused, with
-// both sizes named, instead of reading past the forward's state.
-TEST(RasterizerBackwardTest, AModelOfAnotherSizeThanTheForwardsIsRefused) {
+// A backward given another model or camera than its state's forward is
+// refused, with both sizes named, instead of reading past the state.
+TEST(RasterizerBackwardTest, AStateOfAnotherSizeIsRefusedNamingBothSizes) {
   const RasterCameraT<double> camera = SmallCamera();
   const RasterSettingsT<double> settings;
   Rd rasterizer;
+  RasterStateT<double> state;
   RenderOutputT<double> out;
   const GaussianModelT<double> model = Scene(7, 16);
-  rasterizer.Forward(model, camera, settings, &out);
-  ProjectedGradientsT<double> grad2d;
-  const std::vector<double> d_rgb(out.rgb.size(), 1.0), none;
-  rasterizer.BlendBackward(camera, settings, out, d_rgb, none, none, &grad2d);
+  rasterizer.Forward(model, camera, settings, &out, &state);
+  RenderGradientsT<double> d_out;
+  d_out.rgb.assign(out.rgb.size(), 1.0);
   GaussianGradientsT<double> grad;
-  EXPECT_NO_THROW(rasterizer.ProjectBackward(model, camera, grad2d, &grad));
-  const GaussianModelT<double> larger = Scene(7, 20);
+  EXPECT_NO_THROW(
+      rasterizer.Backward(model, camera, settings, state, out, d_out, &grad));
+  const auto message = [&](const GaussianModelT<double>& m,
+                           const RasterCameraT<double>& c,
+                           const RenderGradientsT<double>& d) {
+    try {
+      rasterizer.Backward(m, c, settings, state, out, d, &grad);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string larger = message(Scene(7, 20), camera, d_out);
+  EXPECT_NE(larger.find("20 Gaussians"), std::string::npos) << larger;
+  EXPECT_NE(larger.find("projected 16"), std::string::npos) << larger;
+  RasterCameraT<double> wider = camera;
+  wider.width = 48;
+  const std::string other_camera = message(model, wider, d_out);
+  EXPECT_NE(other_camera.find("40x32"), std::string::npos) << other_camera;
+  EXPECT_NE(other_camera.find("48x32"), std::string::npos) << other_camera;
+  RenderGradientsT<double> short_rgb;
+  short_rgb.rgb.assign(out.rgb.size() - 3, 1.0);
+  const std::string short_message = message(model, camera, short_rgb);
+  EXPECT_NE(short_message.find(std::to_string(out.rgb.size() - 3)),
+            std::string::npos)
+      << short_message;
+  EXPECT_NE(short_message.find(std::to_string(out.rgb.size())),
+            std::string::npos)
+      << short_message;
+}
+
+// The projection stage alone refuses a forward result of another size.
+TEST(RasterizerBackwardTest, ProjectionBackwardRefusesAnotherModelsResult) {
+  const RasterCameraT<double> camera = SmallCamera();
+  const GaussianModelT<double> model = Scene(8, 16);
+  ProjectedGaussiansT<double> projected;
+  ProjectionForward(model, camera, &projected);
+  ProjectedGradientsT<double> grad2d;
+  grad2d.Assign(projected.size());
+  GaussianGradientsT<double> grad;
+  EXPECT_NO_THROW(ProjectionBackward(model, camera, projected, grad2d, &grad));
   try {
-    rasterizer.ProjectBackward(larger, camera, grad2d, &grad);
+    ProjectionBackward(Scene(8, 20), camera, projected, grad2d, &grad);
     FAIL() << "a model of 20 Gaussians was taken for the forward's 16";
   } catch (const Error& e) {
     const std::string what = e.what();

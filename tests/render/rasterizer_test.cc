@@ -63,7 +63,7 @@ TEST(RasterizerTest, SmallGaussianLandsWhereTheCameraProjects) {
     Add(&model, point, 0.01f, 0.5f, {1, 1, 1});
     Rasterizer rasterizer;
     RenderOutput out;
-    rasterizer.Forward(model, camera, {}, &out);
+    rasterizer.Render(model, camera, {}, &out);
     double sum = 0, sx = 0, sy = 0;
     for (int y = 0; y < out.height; ++y) {
       for (int x = 0; x < out.width; ++x) {
@@ -90,14 +90,15 @@ TEST(RasterizerTest, BlendsExactlyAtAPixelCentre) {
   RasterSettings settings;
   settings.background = {0.1f, 0.3f, 0.5f};
   Rasterizer rasterizer;
+  RasterState state;
   RenderOutput out;
-  rasterizer.Forward(model, camera, settings, &out);
+  rasterizer.Forward(model, camera, settings, &out, &state);
   const std::size_t p = 30 * 128 + 40;
   EXPECT_NEAR(out.alpha[p], 0.6f, 1e-5);
   EXPECT_NEAR(out.rgb[3 * p], 0.8f * 0.6f + 0.1f * 0.4f, 1e-5);
   EXPECT_NEAR(out.rgb[3 * p + 2], 0.4f * 0.6f + 0.5f * 0.4f, 1e-5);
   EXPECT_NEAR(out.depth[p], z, 1e-4);
-  EXPECT_NEAR(rasterizer.final_transmittance()[p], 0.4f, 1e-5);
+  EXPECT_NEAR(state.final_transmittance[p], 0.4f, 1e-5);
 }
 
 TEST(RasterizerTest, NearerGaussianWinsWhateverTheArrayOrder) {
@@ -109,8 +110,8 @@ TEST(RasterizerTest, NearerGaussianWinsWhateverTheArrayOrder) {
   Add(&b, {0, 0, 2}, 0.2f, 0.95f, {1, 0, 0});
   Rasterizer r;
   RenderOutput out_a, out_b;
-  r.Forward(a, camera, {}, &out_a);
-  r.Forward(b, camera, {}, &out_b);
+  r.Render(a, camera, {}, &out_a);
+  r.Render(b, camera, {}, &out_b);
   EXPECT_EQ(out_a.rgb, out_b.rgb);
   const std::size_t centre = 48 * 128 + 64;
   EXPECT_GT(out_a.rgb[3 * centre], 0.9f);
@@ -138,9 +139,9 @@ TEST(RasterizerTest, SameBytesWithOneAndTwoThreads) {
   RenderOutput one, two;
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
-  Rasterizer().Forward(model, camera, {}, &one);
+  Rasterizer().Render(model, camera, {}, &one);
   omp_set_num_threads(2);
-  Rasterizer().Forward(model, camera, {}, &two);
+  Rasterizer().Render(model, camera, {}, &two);
   omp_set_num_threads(threads);
   ASSERT_EQ(one.rgb.size(), two.rgb.size());
   EXPECT_EQ(std::memcmp(one.rgb.data(), two.rgb.data(),
@@ -176,8 +177,8 @@ TEST(RasterizerTest, DoubleAndFloatRenderTheSameImage) {
   camera_d.cy = camera.cy;
   RenderOutput out;
   RenderOutputT<double> out_d;
-  Rasterizer().Forward(model, camera, {}, &out);
-  RasterizerT<double>().Forward(model_d, camera_d, {}, &out_d);
+  Rasterizer().Render(model, camera, {}, &out);
+  RasterizerT<double>().Render(model_d, camera_d, {}, &out_d);
   double worst = 0;
   for (std::size_t i = 0; i < out.rgb.size(); ++i)
     worst = std::max(worst, std::abs(out.rgb[i] - out_d.rgb[i]));
@@ -195,15 +196,16 @@ TEST(RasterizerTest, GradientsAreTheSameBytesWithOneAndTwoThreads) {
   const auto gradients = [&](int threads) {
     omp_set_num_threads(threads);
     Rasterizer r;
+    RasterState state;
     RenderOutput out;
-    r.Forward(model, camera, {}, &out);
-    std::vector<float> d_rgb(out.rgb.size());
-    for (std::size_t i = 0; i < d_rgb.size(); ++i)
-      d_rgb[i] = std::sin(0.37f * i);
-    ProjectedGradients grad2d;
+    r.Forward(model, camera, {}, &out, &state);
+    RenderGradients d_out;
+    d_out.rgb.resize(out.rgb.size());
+    for (std::size_t i = 0; i < d_out.rgb.size(); ++i)
+      d_out.rgb[i] = std::sin(0.37f * i);
+    d_out.depth = out.depth;
     GaussianGradients grad;
-    r.BlendBackward(camera, {}, out, d_rgb, out.depth, {}, &grad2d);
-    r.ProjectBackward(model, camera, grad2d, &grad);
+    r.Backward(model, camera, {}, state, out, d_out, &grad);
     return grad;
   };
   const int threads = omp_get_max_threads();
@@ -292,19 +294,18 @@ TEST_P(StiffCaseTest, OutputsAndGradientsStayFinite) {
   const GaussianModel model = GetParam().make();
   const RasterCamera camera = TestCamera();
   Rasterizer r;
+  RasterState state;
   RenderOutput out;
-  r.Forward(model, camera, {}, &out);
+  r.Forward(model, camera, {}, &out, &state);
   EXPECT_TRUE(AllFinite(out));
   for (const float a : out.alpha) {
     ASSERT_GE(a, 0.0f);
     ASSERT_LE(a, 1.0f);
   }
-  ProjectedGradients grad2d;
+  RenderGradients d_out{std::vector<float>(out.rgb.size(), 1.0f), out.depth,
+                        std::vector<float>(out.alpha.size(), 1.0f)};
   GaussianGradients grad;
-  r.BlendBackward(camera, {}, out, std::vector<float>(out.rgb.size(), 1.0f),
-                  out.depth, std::vector<float>(out.alpha.size(), 1.0f),
-                  &grad2d);
-  r.ProjectBackward(model, camera, grad2d, &grad);
+  r.Backward(model, camera, {}, state, out, d_out, &grad);
   for (const auto* v : {&grad.means, &grad.log_scales, &grad.quats,
                         &grad.opacities, &grad.sh, &grad.means2d}) {
     for (const float x : *v) ASSERT_TRUE(std::isfinite(x));
@@ -325,14 +326,14 @@ TEST(RasterizerTest, AllTransparentSceneShowsTheBackground) {
   RasterSettings settings;
   settings.background = {0.2f, 0.4f, 0.6f};
   RenderOutput out;
-  Rasterizer().Forward(kStiffCases[5].make(), TestCamera(), settings, &out);
+  Rasterizer().Render(kStiffCases[5].make(), TestCamera(), settings, &out);
   EXPECT_NEAR(out.rgb[0], 0.2f, 1e-6);
   EXPECT_EQ(out.alpha[48 * 128 + 64], 0.0f);
 }
 
 TEST(RasterizerTest, ManyGaussiansOnOnePixelSaturateIt) {
   RenderOutput out;
-  Rasterizer().Forward(kStiffCases[4].make(), TestCamera(), {}, &out);
+  Rasterizer().Render(kStiffCases[4].make(), TestCamera(), {}, &out);
   const std::size_t centre = 48 * 128 + 64;
   // Opacity 0.3 each: transmittance falls under 1e-4 after about 26 of them.
   EXPECT_GT(out.alpha[centre], 1.0f - 2e-4f);

@@ -1,14 +1,14 @@
-// Trainer: densification (clone and split by screen-space gradient),
-// pruning, opacity reset, and the static Gaussians that the expansion adds
-// and carves (src/gs/trainer.h).
+// DefaultStrategy: 3DGS's adaptive density control (strategy.h).
+#include "src/gs/strategy.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <random>
-#include <vector>
+#include <string>
+
+#include <Eigen/Geometry>
 
 #include "src/core/error.h"
-#include "src/gs/trainer.h"
 
 namespace pano4d {
 namespace {
@@ -25,8 +25,64 @@ float Sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
 
 }  // namespace
 
-void Trainer::Densify(bool prune_large) {
-  const std::size_t ns = scene_.statics.size();
+void DensifyStatistics::Assign(std::size_t n) {
+  gradient.assign(n, 0.0f);
+  max_radius.assign(n, 0.0f);
+  count.assign(n, 0);
+}
+
+DefaultStrategy::DefaultStrategy(const TrainerOptions& options, double extent,
+                                 std::size_t gaussians)
+    : options_(options), extent_(extent) {
+  stats_.Assign(gaussians);
+}
+
+void DefaultStrategy::StepPreForward(std::int64_t iteration,
+                                     OptimisedScene scene) {
+  if (iteration > 0 && iteration < options_.densify_until &&
+      iteration % options_.opacity_reset_every == 0) {
+    ResetOpacities(scene);
+  }
+}
+
+void DefaultStrategy::StepPostBackward(const RasterState& state,
+                                       const GaussianGradients& grads) {
+  const std::vector<int>& radius = state.projected.radius;
+  if (radius.size() != stats_.gradient.size() ||
+      grads.means2d.size() != 2 * radius.size()) {
+    throw Error("densification", "statistics",
+                std::to_string(stats_.gradient.size()) + " Gaussians",
+                "the forward state holds " + std::to_string(radius.size()) +
+                    " and the gradients " +
+                    std::to_string(grads.means2d.size() / 2));
+  }
+  const int w = state.width, h = state.height;
+  for (std::size_t i = 0; i < radius.size(); ++i) {
+    if (radius[i] <= 0) continue;
+    const float gx = grads.means2d[i * 2] * 0.5f * w;
+    const float gy = grads.means2d[i * 2 + 1] * 0.5f * h;
+    stats_.gradient[i] += std::sqrt(gx * gx + gy * gy);
+    stats_.count[i] += 1;
+    stats_.max_radius[i] =
+        std::max(stats_.max_radius[i], static_cast<float>(radius[i]));
+  }
+}
+
+void DefaultStrategy::StepPostOptimise(std::int64_t iteration,
+                                       OptimisedScene scene,
+                                       std::mt19937_64* rng) {
+  if (iteration >= options_.densify_from &&
+      iteration < options_.densify_until &&
+      iteration % options_.densify_every == 0) {
+    Densify(scene, rng);
+  }
+}
+
+void DefaultStrategy::Densify(OptimisedScene optimised, std::mt19937_64* rng) {
+  GaussianScene& scene = *optimised.scene;
+  // Large Gaussians are pruned only after the first opacity reset (3DGS).
+  const bool prune_large = stats_.reset_done;
+  const std::size_t ns = scene.statics.size();
   const double threshold = options_.densify_gradient;
   const double dense = options_.percent_dense * extent_;
   std::normal_distribution<float> normal;
@@ -36,9 +92,9 @@ void Trainer::Densify(bool prune_large) {
     std::uint32_t row;  // in the composed order
   };
   std::vector<Candidate> candidates;
-  for (std::size_t i = 0; i < grad_accum_.size(); ++i) {
-    if (grad_count_[i] == 0) continue;
-    const float g = grad_accum_[i] / grad_count_[i];
+  for (std::size_t i = 0; i < stats_.gradient.size(); ++i) {
+    if (stats_.count[i] == 0) continue;
+    const float g = stats_.gradient[i] / stats_.count[i];
     if (g >= threshold)
       candidates.push_back({g, static_cast<std::uint32_t>(i)});
   }
@@ -48,7 +104,7 @@ void Trainer::Densify(bool prune_large) {
                      return a.gradient > b.gradient;
                    });
   const std::int64_t budget = std::max<std::int64_t>(
-      0, options_.max_gaussians - static_cast<std::int64_t>(scene_.size()));
+      0, options_.max_gaussians - static_cast<std::int64_t>(scene.size()));
   if (static_cast<std::int64_t>(candidates.size()) > budget)
     candidates.resize(budget);
   std::sort(
@@ -87,7 +143,7 @@ void Trainer::Densify(bool prune_large) {
       if (rot.norm() < kMinQuaternionNorm) rot = Eigen::Quaternionf::Identity();
       rot.normalize();
       Eigen::Vector3f local;
-      for (int c = 0; c < 3; ++c) local[c] = std::exp(ls[c]) * normal(rng_);
+      for (int c = 0; c < 3; ++c) local[c] = std::exp(ls[c]) * normal(*rng);
       const Eigen::Vector3f offset_world = rot * local;
       for (int c = 0; c < 3; ++c) {
         mean[c] += offset_world[c];
@@ -108,7 +164,8 @@ void Trainer::Densify(bool prune_large) {
         const float largest = std::exp(std::max({s[0], s[1], s[2]}));
         const bool too_wide = largest > kMaxWorldScaleFraction * extent_;
         const bool too_big_on_screen =
-            i < count && max_radius_[offset + i] > options_.max_screen_radius;
+            i < count &&
+            stats_.max_radius[offset + i] > options_.max_screen_radius;
         if (too_wide || too_big_on_screen) keep[i] = 0;
       }
     }
@@ -119,48 +176,48 @@ void Trainer::Densify(bool prune_large) {
     removed += static_cast<std::int64_t>(before - model->size()) -
                static_cast<std::int64_t>(split.size());
   };
-  const std::size_t nd = scene_.dynamics.size();
-  process(&scene_.statics, nullptr, 0, &static_adam_, 0, ns);
-  process(&scene_.dynamics, &scene_.logits, scene_.bases.num_bases,
-          &dynamic_adam_, ns, nd);
+  const std::size_t nd = scene.dynamics.size();
+  process(&scene.statics, nullptr, 0, optimised.statics, 0, ns);
+  process(&scene.dynamics, &scene.logits, scene.bases.num_bases,
+          optimised.dynamics, ns, nd);
   densified_total_ += added;
   pruned_total_ += removed;
-  const std::size_t n = scene_.size();
-  grad_accum_.assign(n, 0.0f);
-  max_radius_.assign(n, 0.0f);
-  grad_count_.assign(n, 0);
+  stats_.Assign(scene.size());
 }
 
-std::int64_t Trainer::AddStaticGaussians(const GaussianModel& extra) {
-  if (extra.sh_degree != scene_.statics.sh_degree) {
+std::int64_t DefaultStrategy::AddStatic(OptimisedScene optimised,
+                                        const GaussianModel& extra) {
+  GaussianScene& scene = *optimised.scene;
+  if (extra.sh_degree != scene.statics.sh_degree) {
     throw Error("trainer", "sh_degree", std::to_string(extra.sh_degree),
                 "added Gaussians must have the scene's SH degree " +
-                    std::to_string(scene_.statics.sh_degree));
+                    std::to_string(scene.statics.sh_degree));
   }
   const std::int64_t room = std::max<std::int64_t>(
-      0, options_.max_gaussians - static_cast<std::int64_t>(scene_.size()));
+      0, options_.max_gaussians - static_cast<std::int64_t>(scene.size()));
   const std::int64_t count =
       std::min<std::int64_t>(room, static_cast<std::int64_t>(extra.size()));
   if (count == 0) return 0;
   std::vector<std::uint32_t> rows(static_cast<std::size_t>(count));
   std::iota(rows.begin(), rows.end(), 0u);
-  const std::size_t ns = scene_.statics.size();
-  AppendGaussianRows(extra, rows, &scene_.statics);
-  static_adam_.AppendRows(count);
-  // Densification statistics are in composed order: statics, then dynamics.
+  const std::size_t ns = scene.statics.size();
+  AppendGaussianRows(extra, rows, &scene.statics);
+  optimised.statics->AppendRows(count);
+  // The statistics are in composed order: statics, then dynamics.
   const auto insert = [&](auto* v) {
     v->insert(v->begin() + static_cast<std::ptrdiff_t>(ns),
               static_cast<std::size_t>(count), 0);
   };
-  insert(&grad_accum_);
-  insert(&max_radius_);
-  insert(&grad_count_);
+  insert(&stats_.gradient);
+  insert(&stats_.max_radius);
+  insert(&stats_.count);
   return count;
 }
 
-std::int64_t Trainer::RemoveStaticGaussians(
-    const std::vector<std::uint8_t>& keep) {
-  const std::size_t ns = scene_.statics.size();
+std::int64_t DefaultStrategy::RemoveStatic(
+    OptimisedScene optimised, const std::vector<std::uint8_t>& keep) {
+  GaussianScene& scene = *optimised.scene;
+  const std::size_t ns = scene.statics.size();
   if (keep.size() != ns) {
     throw Error(
         "trainer", "keep", std::to_string(keep.size()),
@@ -169,28 +226,28 @@ std::int64_t Trainer::RemoveStaticGaussians(
   const auto removed = static_cast<std::int64_t>(
       std::count(keep.begin(), keep.end(), std::uint8_t{0}));
   if (removed == 0) return 0;
-  KeepGaussianRows(keep, &scene_.statics);
-  static_adam_.KeepRows(keep);
-  // Densification statistics are in composed order: statics, then dynamics.
+  KeepGaussianRows(keep, &scene.statics);
+  optimised.statics->KeepRows(keep);
+  // The statistics are in composed order: statics, then dynamics.
   const auto drop = [&](auto* v) {
     std::size_t out = 0;
     for (std::size_t i = 0; i < v->size(); ++i)
       if (i >= ns || keep[i]) (*v)[out++] = (*v)[i];
     v->resize(out);
   };
-  drop(&grad_accum_);
-  drop(&max_radius_);
-  drop(&grad_count_);
+  drop(&stats_.gradient);
+  drop(&stats_.max_radius);
+  drop(&stats_.count);
   pruned_total_ += removed;
   return removed;
 }
 
-void Trainer::ResetOpacities() {
+void DefaultStrategy::ResetOpacities(OptimisedScene optimised) {
   const float cap = InverseSigmoid(kResetOpacity);
-  for (float& o : scene_.statics.opacities) o = std::min(o, cap);
-  for (float& o : scene_.dynamics.opacities) o = std::min(o, cap);
+  for (float& o : optimised.scene->statics.opacities) o = std::min(o, cap);
+  for (float& o : optimised.scene->dynamics.opacities) o = std::min(o, cap);
   // 3DGS replaces the opacity tensor: its optimiser state starts afresh.
-  for (Adam* adam : {&static_adam_, &dynamic_adam_}) {
+  for (Adam* adam : {optimised.statics, optimised.dynamics}) {
     for (int g = 0; g < adam->groups(); ++g) {
       if (adam->name(g) != "opacities") continue;
       std::fill(adam->first_moment(g).begin(), adam->first_moment(g).end(),
@@ -199,7 +256,7 @@ void Trainer::ResetOpacities() {
                 0.0f);
     }
   }
-  reset_done_ = true;
+  stats_.reset_done = true;
 }
 
 }  // namespace pano4d

@@ -1,0 +1,95 @@
+#include "src/gs/trainer_options.h"
+
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "src/core/error.h"
+
+namespace pano4d {
+
+void TrainerOptions::Check() const {
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) {
+      throw Error("fit options", name, std::to_string(v), "must be positive");
+    }
+  };
+  const auto non_negative = [](double v, const char* name) {
+    if (!(v >= 0) || !std::isfinite(v)) {
+      throw Error("fit options", name, std::to_string(v),
+                  "must be zero or positive");
+    }
+  };
+  positive(iterations, "iterations");
+  if (!(ssim_weight >= 0 && ssim_weight <= 1)) {
+    throw Error("fit options", "ssim_weight", std::to_string(ssim_weight),
+                "must be in [0, 1]");
+  }
+  non_negative(depth_weight, "depth_weight");
+  non_negative(smoothness_weight, "smoothness_weight");
+  non_negative(anisotropy_weight, "anisotropy_weight");
+  non_negative(normal_weight, "normal_weight");
+  non_negative(hidden_weight, "hidden_weight");
+  non_negative(hidden_thickness, "hidden_thickness");
+  non_negative(appearance_weight, "appearance_weight");
+  positive(normal_tolerance, "normal_tolerance");
+  if (!(max_anisotropy >= 1)) {
+    throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
+                "must be at least 1");
+  }
+  for (auto [v, name] : {std::pair{lr_mean, "lr_mean"},
+                         {lr_log_scale, "lr_log_scale"},
+                         {lr_quat, "lr_quat"},
+                         {lr_opacity, "lr_opacity"},
+                         {lr_sh, "lr_sh"},
+                         {lr_logit, "lr_logit"},
+                         {lr_basis_rotation, "lr_basis_rotation"},
+                         {lr_basis_translation, "lr_basis_translation"},
+                         {lr_appearance, "lr_appearance"}})
+    non_negative(v, name);
+  positive(densify_every, "densify_every");
+  positive(densify_gradient, "densify_gradient");
+  positive(percent_dense, "percent_dense");
+  non_negative(prune_opacity, "prune_opacity");
+  positive(max_screen_radius, "max_screen_radius");
+  positive(opacity_reset_every, "opacity_reset_every");
+  non_negative(max_static_scale_pixels, "max_static_scale_pixels");
+  positive(static_cast<double>(max_gaussians), "max_gaussians");
+}
+
+nlohmann::json TrainerOptions::ToJson() const {
+  return {{"iterations", iterations},
+          {"ssim_weight", ssim_weight},
+          {"depth_weight", depth_weight},
+          {"smoothness_weight", smoothness_weight},
+          {"anisotropy_weight", anisotropy_weight},
+          {"max_anisotropy", max_anisotropy},
+          {"normal_weight", normal_weight},
+          {"normal_tolerance", normal_tolerance},
+          {"hidden_weight", hidden_weight},
+          {"hidden_thickness", hidden_thickness},
+          {"appearance", appearance},
+          {"appearance_weight", appearance_weight},
+          {"lr_appearance", lr_appearance},
+          {"lr_mean", lr_mean},
+          {"lr_log_scale", lr_log_scale},
+          {"lr_quat", lr_quat},
+          {"lr_opacity", lr_opacity},
+          {"lr_sh", lr_sh},
+          {"lr_logit", lr_logit},
+          {"lr_basis_rotation", lr_basis_rotation},
+          {"lr_basis_translation", lr_basis_translation},
+          {"densify_from", densify_from},
+          {"densify_until", densify_until},
+          {"densify_every", densify_every},
+          {"densify_gradient", densify_gradient},
+          {"percent_dense", percent_dense},
+          {"prune_opacity", prune_opacity},
+          {"max_screen_radius", max_screen_radius},
+          {"opacity_reset_every", opacity_reset_every},
+          {"max_gaussians", max_gaussians},
+          {"max_static_scale_pixels", max_static_scale_pixels},
+          {"background", {background.x(), background.y(), background.z()}}};
+}
+
+}  // namespace pano4d
