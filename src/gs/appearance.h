@@ -24,7 +24,8 @@ void ApplyAppearance(const float* transform, const std::vector<float>& rgb,
 
 // Backward of ApplyAppearance: from dL/dout, dL/drgb = A^T dL/dout into
 // `d_rgb` (resized) and dL/dA, dL/db added to `d_transform` (12 floats).
-// Sums over pixels in double, in pixel order.
+// Sums over pixels in double, in blocks of pixels summed in order: the
+// same whatever the thread count.
 void ApplyAppearanceBackward(const float* transform,
                              const std::vector<float>& rgb,
                              const std::vector<float>& d_out,

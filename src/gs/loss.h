@@ -19,12 +19,20 @@ struct PhotometricLoss {
   double total = 0.0;  // the weighted loss above
 };
 
+// Scratch of ComputePhotometricLoss, reused between calls (a fit's every
+// step) so that a step does not allocate.
+struct PhotometricLossBuffers {
+  std::vector<double> rows, moments, grads, blurred;
+};
+
 // The loss, and dL/dr into `d_rendered` (resized to r's size) when it is
-// not null. Throws pano4d::Error for mismatched sizes or a non-finite
-// input value.
+// not null. Computed in double, rows in parallel; the result does not
+// depend on the thread count (sums are reduced row by row, in order).
+// Throws pano4d::Error for mismatched sizes or a non-finite input value.
 PhotometricLoss ComputePhotometricLoss(
     const std::vector<float>& rendered, const std::vector<float>& target,
     int width, int height, double ssim_weight = kDefaultSsimWeight,
-    std::vector<float>* d_rendered = nullptr);
+    std::vector<float>* d_rendered = nullptr,
+    PhotometricLossBuffers* buffers = nullptr);
 
 }  // namespace pano4d

@@ -60,6 +60,45 @@ std::optional<double> RefinementLoss(const std::vector<float>& rgb,
   return extra.weight * sum * norm;
 }
 
+// Rows per block of BlockSum.
+constexpr std::size_t kSumBlock = 4096;
+
+// The sum of term(i) over i < n, rows in parallel: blocks of kSumBlock rows
+// are summed in order, so the sum does not depend on the thread count.
+// term(i) may write to row i's own entries.
+template <typename Term>
+double BlockSum(std::size_t n, Term&& term) {
+  const std::ptrdiff_t blocks =
+      static_cast<std::ptrdiff_t>((n + kSumBlock - 1) / kSumBlock);
+  std::vector<double> sums(blocks, 0.0);
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t b = 0; b < blocks; ++b) {
+    const std::size_t end = std::min(n, (b + 1) * kSumBlock);
+    for (std::size_t i = b * kSumBlock; i < end; ++i) sums[b] += term(i);
+  }
+  double total = 0;
+  for (double v : sums) total += v;
+  return total;
+}
+
+// Zeros in *g sized like `model`, written in parallel: a step's gradient
+// arrays hold millions of values.
+void ZeroGradients(const GaussianModel& model, GaussianGradients* g) {
+  const std::vector<float>* sources[] = {&model.means, &model.log_scales,
+                                         &model.quats, &model.opacities,
+                                         &model.sh};
+  std::vector<float>* arrays[] = {&g->means,     &g->log_scales, &g->quats,
+                                  &g->opacities, &g->sh,         &g->means2d};
+  for (int k = 0; k < 6; ++k)
+    arrays[k]->resize(k < 5 ? sources[k]->size() : 2 * model.size());
+#pragma omp parallel
+  for (std::vector<float>* v : arrays) {
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(v->size());
+#pragma omp for schedule(static) nowait
+    for (std::ptrdiff_t i = 0; i < size; ++i) (*v)[i] = 0.0f;
+  }
+}
+
 }  // namespace
 
 Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
@@ -217,44 +256,59 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
                        const GaussianGradients* direct) {
   rasterizer_.Backward(composed_, camera, Settings(), state, out, d_out,
                        &grads_);
-  const auto add = [](const std::vector<float>& src, std::size_t begin,
-                      std::size_t count, std::vector<float>* dst) {
-    for (std::size_t i = 0; i < count; ++i) (*dst)[i] += src[begin + i];
-  };
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(composed_.size());
   if (direct != nullptr) {
     for (auto [from, to] : {std::pair{&direct->means, &grads_.means},
                             {&direct->log_scales, &grads_.log_scales},
                             {&direct->quats, &grads_.quats}}) {
-      if (!from->empty()) add(*from, 0, to->size(), to);
+      if (from->empty()) continue;
+      const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(to->size());
+#pragma omp parallel for schedule(static)
+      for (std::ptrdiff_t i = 0; i < count; ++i) (*to)[i] += (*from)[i];
     }
   }
   if (gradient_hook) gradient_hook(&grads_);
 
   // A Gaussian with any non-finite gradient is left out of this step (its
   // gradient zeroed, so that it cannot reach the shared motion bases), and
-  // counted.
-  const std::size_t n = composed_.size();
+  // counted. The others' gradients join the static or dynamic groups'.
+  const std::ptrdiff_t ns = static_cast<std::ptrdiff_t>(scene_.statics.size());
   const int k3 = composed_.sh_coefficients() * 3;
   std::int64_t bad = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    float* means = &grads_.means[i * 3];
+    float* log_scales = &grads_.log_scales[i * 3];
+    float* quats = &grads_.quats[i * 4];
+    float* sh = &grads_.sh[i * k3];
+    float* means2d = &grads_.means2d[i * 2];
     bool finite = std::isfinite(grads_.opacities[i]);
     for (int j = 0; j < 3; ++j)
-      finite = finite && std::isfinite(grads_.means[i * 3 + j]) &&
-               std::isfinite(grads_.log_scales[i * 3 + j]);
-    for (int j = 0; j < 4; ++j)
-      finite = finite && std::isfinite(grads_.quats[i * 4 + j]);
-    for (int j = 0; j < k3; ++j)
-      finite = finite && std::isfinite(grads_.sh[i * k3 + j]);
-    for (int j = 0; j < 2; ++j)
-      finite = finite && std::isfinite(grads_.means2d[i * 2 + j]);
-    if (finite) continue;
-    ++bad;
-    grads_.opacities[i] = 0;
-    std::fill_n(&grads_.means[i * 3], 3, 0.0f);
-    std::fill_n(&grads_.log_scales[i * 3], 3, 0.0f);
-    std::fill_n(&grads_.quats[i * 4], 4, 0.0f);
-    std::fill_n(&grads_.sh[i * k3], k3, 0.0f);
-    std::fill_n(&grads_.means2d[i * 2], 2, 0.0f);
+      finite =
+          finite && std::isfinite(means[j]) && std::isfinite(log_scales[j]);
+    for (int j = 0; j < 4; ++j) finite = finite && std::isfinite(quats[j]);
+    for (int j = 0; j < k3; ++j) finite = finite && std::isfinite(sh[j]);
+    for (int j = 0; j < 2; ++j) finite = finite && std::isfinite(means2d[j]);
+    if (!finite) {
+      ++bad;
+      grads_.opacities[i] = 0;
+      std::fill_n(means, 3, 0.0f);
+      std::fill_n(log_scales, 3, 0.0f);
+      std::fill_n(quats, 4, 0.0f);
+      std::fill_n(sh, k3, 0.0f);
+      std::fill_n(means2d, 2, 0.0f);
+    }
+    // Dynamic rows' means and quaternions reach their canonical ones
+    // through the motion (below).
+    GaussianGradients& to = i < ns ? static_grads_ : dynamic_grads_;
+    const std::ptrdiff_t r = i < ns ? i : i - ns;
+    if (i < ns) {
+      for (int j = 0; j < 3; ++j) to.means[r * 3 + j] += means[j];
+      for (int j = 0; j < 4; ++j) to.quats[r * 4 + j] += quats[j];
+    }
+    for (int j = 0; j < 3; ++j) to.log_scales[r * 3 + j] += log_scales[j];
+    to.opacities[r] += grads_.opacities[i];
+    for (int j = 0; j < k3; ++j) to.sh[r * k3 + j] += sh[j];
   }
   if (bad > 0) {
     skipped_rows_total_ += bad;
@@ -263,17 +317,7 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
                             "update was skipped";
   }
 
-  const std::size_t ns = scene_.statics.size();
-  add(grads_.means, 0, ns * 3, &static_grads_.means);
-  add(grads_.log_scales, 0, ns * 3, &static_grads_.log_scales);
-  add(grads_.quats, 0, ns * 4, &static_grads_.quats);
-  add(grads_.opacities, 0, ns, &static_grads_.opacities);
-  add(grads_.sh, 0, ns * k3, &static_grads_.sh);
-  const std::size_t nd = scene_.dynamics.size();
-  if (nd > 0) {
-    add(grads_.log_scales, ns * 3, nd * 3, &dynamic_grads_.log_scales);
-    add(grads_.opacities, ns, nd, &dynamic_grads_.opacities);
-    add(grads_.sh, ns * k3, nd * k3, &dynamic_grads_.sh);
+  if (!scene_.dynamics.opacities.empty()) {
     const auto start = Clock::now();
     PoseDynamicGaussiansBackward(scene_.dynamics, scene_.logits, scene_.bases,
                                  time, ns, grads_.means, grads_.quats,
@@ -306,8 +350,9 @@ StepReport Trainer::Step() {
     ApplyAppearance(appearance(view_index), out_.rgb, &corrected_);
     rendered = &corrected_;
   }
-  const PhotometricLoss photo = ComputePhotometricLoss(
-      *rendered, view.rgb, w, h, options_.ssim_weight, &d_out_.rgb);
+  const PhotometricLoss photo =
+      ComputePhotometricLoss(*rendered, view.rgb, w, h, options_.ssim_weight,
+                             &d_out_.rgb, &loss_buffers_);
   if (options_.appearance) {
     appearance_grads_.assign(appearance_.size(), 0.0f);
     float* d_transform = &appearance_grads_[view_index * kAppearanceWidth];
@@ -324,29 +369,30 @@ StepReport Trainer::Step() {
   }
   report.l1 = photo.l1;
   report.ssim = photo.ssim;
-  double mse = 0;
-  for (std::size_t i = 0; i < rendered->size(); ++i) {
-    const double e = double((*rendered)[i]) - view.rgb[i];
-    mse += e * e;
-  }
-  mse /= static_cast<double>(out_.rgb.size());
+  const double mse = BlockSum(rendered->size(),
+                              [&](std::size_t i) {
+                                const double e =
+                                    double((*rendered)[i]) - view.rgb[i];
+                                return e * e;
+                              }) /
+                     static_cast<double>(out_.rgb.size());
   report.psnr = PsnrFromMse(mse);
   std::vector<float>& d_depth = d_out_.depth;
   d_depth.clear();
   const float median = median_depth_[&view - views_.data()];
   if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {
-    d_depth.assign(view.depth.size(), 0.0f);
-    std::size_t count = 0;
-    for (float d : view.depth) count += d > 0;
-    double sum = 0;
+    d_depth.resize(view.depth.size());
+    const std::size_t count = static_cast<std::size_t>(BlockSum(
+        view.depth.size(), [&](std::size_t p) { return view.depth[p] > 0; }));
     const double scale = 1.0 / (static_cast<double>(count) * median);
     const float g = static_cast<float>(options_.depth_weight * scale);
-    for (std::size_t p = 0; p < view.depth.size(); ++p) {
-      if (!(view.depth[p] > 0)) continue;
+    const double sum = BlockSum(view.depth.size(), [&](std::size_t p) {
+      d_depth[p] = 0.0f;
+      if (!(view.depth[p] > 0)) return 0.0;
       const float diff = out_.depth[p] - view.depth[p];
-      sum += std::abs(diff);
       d_depth[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
-    }
+      return double(std::abs(diff));
+    });
     report.depth = options_.depth_weight * sum * scale;
   }
   direct_grads_.means.clear();
@@ -385,8 +431,8 @@ StepReport Trainer::Step() {
   }
 
   start = Clock::now();
-  static_grads_.Assign(scene_.statics);
-  dynamic_grads_.Assign(scene_.dynamics);
+  ZeroGradients(scene_.statics, &static_grads_);
+  ZeroGradients(scene_.dynamics, &dynamic_grads_);
   logit_grads_.assign(scene_.logits.size(), 0.0f);
   basis_grads_.num_bases = scene_.bases.num_bases;
   basis_grads_.num_times = scene_.bases.num_times;
@@ -412,21 +458,21 @@ StepReport Trainer::Step() {
   }
   if (options_.anisotropy_weight > 0 && scene_.size() > 0) {
     const double norm = options_.anisotropy_weight / scene_.size();
-    const auto shape = [&](const std::vector<float>& log_scales,
-                           std::vector<float>* grads) {
-      for (std::size_t i = 0; i * 3 < log_scales.size(); ++i) {
-        const float* s = &log_scales[i * 3];
+    const double bound = options_.max_anisotropy;
+    for (auto [log_scales, grads] :
+         {std::pair{&scene_.statics.log_scales, &static_grads_.log_scales},
+          {&scene_.dynamics.log_scales, &dynamic_grads_.log_scales}}) {
+      report.anisotropy += BlockSum(log_scales->size() / 3, [&](std::size_t i) {
+        const float* s = &(*log_scales)[i * 3];
         const int hi = static_cast<int>(std::max_element(s, s + 3) - s);
         const int lo = static_cast<int>(std::min_element(s, s + 3) - s);
         const double ratio = std::exp(double(s[hi]) - s[lo]);
-        if (ratio <= options_.max_anisotropy) continue;
-        report.anisotropy += norm * (ratio - options_.max_anisotropy);
+        if (ratio <= bound) return 0.0;
         (*grads)[i * 3 + hi] += static_cast<float>(norm * ratio);
         (*grads)[i * 3 + lo] -= static_cast<float>(norm * ratio);
-      }
-    };
-    shape(scene_.statics.log_scales, &static_grads_.log_scales);
-    shape(scene_.dynamics.log_scales, &dynamic_grads_.log_scales);
+        return norm * (ratio - bound);
+      });
+    }
     report.loss += report.anisotropy;
   }
   if (scene_.has_motion() && options_.smoothness_weight > 0) {

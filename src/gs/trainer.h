@@ -12,6 +12,7 @@
 
 #include "src/gs/adam.h"
 #include "src/gs/appearance.h"
+#include "src/gs/loss.h"
 #include "src/gs/scene.h"
 #include "src/gs/scene_editor.h"
 #include "src/gs/strategy.h"
@@ -195,6 +196,7 @@ class Trainer : public SceneEditor {
   GaussianGradients direct_grads_;
   RenderGradients d_out_, d_extra_;
   std::vector<float> corrected_, d_corrected_, appearance_grads_;
+  PhotometricLossBuffers loss_buffers_;
   GaussianGradients static_grads_, dynamic_grads_;
   std::vector<float> logit_grads_;
   MotionBases basis_grads_;

@@ -16,6 +16,7 @@
 #include "src/core/workspace.h"
 #include "src/gs/trainer.h"
 #include "src/pipeline/bench.h"
+#include "src/pipeline/fit_options.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"
 
@@ -78,6 +79,37 @@ double NanosecondsPerCall(double min_seconds, std::int64_t calls_per_body,
   }
 }
 
+// The trainer phases that a step takes on every step, seconds.
+double StepSeconds(const PhaseTimes& t) {
+  return t.compose + t.forward + t.loss + t.backward + t.motion + t.optimise;
+}
+
+// Mean phase times of `steps` fit steps on `scene` and the workspace's
+// training frames, with the options a default fit of them resolves to
+// (losses, appearance) and densification off, after one warm-up step:
+// what a step costs beside the rasterizer.
+PhaseTimes FitStepPhases(const GaussianScene& scene,
+                         const WorkspaceFrames& frames, int steps) {
+  FitOptions given;
+  given.iterations = steps + 1;
+  const FitOptions used = ResolveFitOptions(given, FitInputOf(frames));
+  TrainerOptions options = used.trainer;
+  options.densify_from = options.densify_until = options.iterations + 1;
+  Trainer trainer(scene, LoadTrainingViews(frames.train), options, 0);
+  trainer.Step();
+  const PhaseTimes warm = trainer.times();
+  for (int i = 0; i < steps; ++i) trainer.Step();
+  PhaseTimes t = trainer.times();
+  for (auto [total, first] : {std::pair{&t.compose, warm.compose},
+                              {&t.forward, warm.forward},
+                              {&t.loss, warm.loss},
+                              {&t.backward, warm.backward},
+                              {&t.motion, warm.motion},
+                              {&t.optimise, warm.optimise}})
+    *total = (*total - first) / steps;
+  return t;
+}
+
 // The fitted scene of a workspace (`pano4d fit`'s checkpoint) rendered
 // from its training cameras at their times, one camera per run, cycling.
 BenchResult BenchFittedScene(const BenchRenderOptions& options) {
@@ -99,7 +131,7 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
   rasterizer.Forward(model, cameras[0], {}, &out, &state);  // warm-up
   std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
       blend_ms, blend_backward_ms, project_backward_ms;
-  std::uint64_t visible = 0, evaluations = 0;
+  std::uint64_t visible = 0, evaluations = 0, entries = 0;
   GaussianGradients grad;
   RenderGradients d_out;
   for (int r = 0; r < options.repeats; ++r) {
@@ -115,6 +147,7 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
     blend_ms.push_back(state.stats.blend_ms);
     visible += state.stats.visible;
     evaluations += state.stats.pixel_evaluations;
+    entries += state.stats.tile_entries;
     d_out.rgb.assign(out.rgb.size(), 1e-3f);
     Timer backward;
     const RasterBackwardStats backward_stats =
@@ -125,6 +158,7 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
   }
   const double f = UpperMedian(forward_ms), b = UpperMedian(backward_ms),
                c = UpperMedian(compose_ms);
+  const PhaseTimes step = FitStepPhases(scene, frames, options.repeats);
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
   result.rows.push_back(
@@ -145,8 +179,17 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
        {"forward_backward_ms", f + b},
        {"fps", 1e3 / f},
        {"visible", visible / options.repeats},
-       {"pixel_evaluations_per_s",
-        evaluations / (1e-3 * f * options.repeats)}});
+       {"tile_entries", entries / options.repeats},
+       {"pixel_evaluations", evaluations / options.repeats},
+       {"pixel_evaluations_per_s", evaluations / (1e-3 * f * options.repeats)},
+       {"step_ms",
+        {{"compose", 1e3 * step.compose},
+         {"forward", 1e3 * step.forward},
+         {"loss", 1e3 * step.loss},
+         {"backward", 1e3 * step.backward},
+         {"motion", 1e3 * step.motion},
+         {"optimise", 1e3 * step.optimise},
+         {"total", 1e3 * StepSeconds(step)}}}});
   result.table = StringPrintf(
       "pano4d %s bench render: the fitted scene of %s (%zu static, %zu "
       "dynamic Gaussians) from its %zu training cameras at their times; "
@@ -165,6 +208,13 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
       "%.2f, project %.2f ms (medians)\n",
       UpperMedian(project_ms), UpperMedian(bin_ms), UpperMedian(blend_ms),
       UpperMedian(blend_backward_ms), UpperMedian(project_backward_ms));
+  result.table += StringPrintf(
+      "fit step (densification off, mean of %d): %.2f ms: compose %.2f, "
+      "forward %.2f, losses %.2f, backward %.2f, motion %.2f, optimiser "
+      "%.2f ms\n",
+      options.repeats, 1e3 * StepSeconds(step), 1e3 * step.compose,
+      1e3 * step.forward, 1e3 * step.loss, 1e3 * step.backward,
+      1e3 * step.motion, 1e3 * step.optimise);
   return result;
 }
 

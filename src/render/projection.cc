@@ -34,6 +34,13 @@ void ProjectedGradientsT<T>::Assign(std::size_t n) {
 }
 
 template <typename T>
+void ProjectedGradientsT<T>::Resize(std::size_t n) {
+  for (auto* v :
+       {&x, &y, &conic_a, &conic_b, &conic_c, &opacity, &r, &g, &b, &depth})
+    v->resize(n);
+}
+
+template <typename T>
 void GaussianGradientsT<T>::Assign(const GaussianModelT<T>& model) {
   means.assign(model.means.size(), T(0));
   log_scales.assign(model.log_scales.size(), T(0));
@@ -80,25 +87,32 @@ void ProjectionForward(const GaussianModelT<T>& model,
     // the bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
     // cov_yy).
     const T k = T(2.0) * std::log(opacity / T(kMinAlpha));
-    const T extent_x = std::sqrt(k * cov(0, 0)) + T(kAlphaBoxMargin);
-    const T extent_y = std::sqrt(k * cov(1, 1)) + T(kAlphaBoxMargin);
+    // Clamped as the radius is, so that tile arithmetic stays in range.
+    const T extent_x =
+        std::min(T(kMaxRadius), std::sqrt(k * cov(0, 0)) + T(kAlphaBoxMargin));
+    const T extent_y =
+        std::min(T(kMaxRadius), std::sqrt(k * cov(1, 1)) + T(kAlphaBoxMargin));
     const T mid = T(0.5) * (cov(0, 0) + cov(1, 1));
     const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
     const T radius =
         std::min(T(kMaxRadius), std::ceil(T(3.0) * std::sqrt(lambda)));
     const Eigen::Matrix<T, 2, 1> pixel = ProjectPoint(t, camera, jac.inv_z);
     const T px = pixel.x(), py = pixel.y();
-    if (!std::isfinite(radius) || !std::isfinite(px) || !std::isfinite(py))
+    if (!std::isfinite(radius) || !std::isfinite(extent_x) ||
+        !std::isfinite(extent_y) || !std::isfinite(px) || !std::isfinite(py))
       continue;
-    // Tiles touched by the 3-sigma square around the mean, [x0, x1).
+    // Tiles touched by the alpha >= kMinAlpha box, [x0, x1): the footprint
+    // the opacity allows (a faint Gaussian's is smaller than 3 sigma, an
+    // opaque one's up to 3.3 sigma), bounded along each axis rather than by
+    // the square of the largest axis.
     const auto tile = [](T v, int tiles) {
       return static_cast<int>(
           std::clamp(v / kTileSize, T(0.0), static_cast<T>(tiles)));
     };
-    const int x0 = tile(px - radius, tiles_x),
-              x1 = tile(px + radius + kTileSize - 1, tiles_x);
-    const int y0 = tile(py - radius, tiles_y),
-              y1 = tile(py + radius + kTileSize - 1, tiles_y);
+    const int x0 = tile(px - extent_x, tiles_x),
+              x1 = tile(px + extent_x + kTileSize - 1, tiles_x);
+    const int y0 = tile(py - extent_y, tiles_y),
+              y1 = tile(py + extent_y + kTileSize - 1, tiles_y);
     if (x1 <= x0 || y1 <= y0) continue;
 
     p.x[i] = px;

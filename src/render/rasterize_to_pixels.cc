@@ -140,7 +140,9 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
   const int tiles_y = (height + kTileSize - 1) / kTileSize;
   const ProjectedGaussiansT<T>& p = state.projected;
   constexpr int kPer = 10;  // x, y, conic a b c, opacity, r g b, depth
-  entry_grads->assign(kPer * ids.size(), T(0));
+  // Every entry's gradient is written below (zero where the entry did not
+  // blend), so the buffer is only sized.
+  entry_grads->resize(kPer * ids.size());
 
   // Gaussian-major, back to front, as the forward: each Gaussian updates
   // the pixels of its box (BoxInTile) whose last contributor lies beyond it,
@@ -190,12 +192,22 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
         }
       }
     }
-    for (std::uint32_t k = end; k-- > begin;) {
+    // Entries past every pixel's last contributor blended nowhere (the
+    // forward stopped before them): their gradient is zero.
+    const std::uint32_t stop =
+        std::max(begin, *std::max_element(last, last + kTilePixels));
+    std::fill(entry_grads->begin() + kPer * static_cast<std::size_t>(stop),
+              entry_grads->begin() + kPer * static_cast<std::size_t>(end),
+              T(0));
+    for (std::uint32_t k = stop; k-- > begin;) {
       const std::uint32_t g = ids[k];
+      T* e = &(*entry_grads)[kPer * static_cast<std::size_t>(k)];
       TileBox box;
       if (!BoxInTile(p, g, rect.x_begin, rect.x_end, rect.y_begin, rect.y_end,
-                     &box))
+                     &box)) {
+        std::fill(e, e + kPer, T(0));
         continue;
+      }
       const T gx = p.x[g], ca = p.conic_a[g], cb = p.conic_b[g],
               cc = p.conic_c[g];
       const T op = p.opacity[g], z = p.depth[g];
@@ -262,7 +274,6 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
           }
         }
       }
-      T* e = &(*entry_grads)[kPer * static_cast<std::size_t>(k)];
       for (int f = 0; f < kPer; ++f) {
         T sum = 0;
         for (int lane = 0; lane < kTileSize; ++lane) sum += lane_sum[f][lane];
@@ -271,13 +282,24 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
     }
   }
 
-  grad->Assign(p.x.size());
-  std::vector<T>* fields[kPer] = {
-      &grad->x,       &grad->y, &grad->conic_a, &grad->conic_b, &grad->conic_c,
-      &grad->opacity, &grad->r, &grad->g,       &grad->b,       &grad->depth};
-  for (std::size_t k = 0; k < ids.size(); ++k) {
-    for (int f = 0; f < kPer; ++f)
-      (*fields[f])[ids[k]] += (*entry_grads)[kPer * k + f];
+  // Each Gaussian's entries summed in entry order (its tiles' order), the
+  // Gaussians in parallel: the same sums whatever the threads.
+  grad->Resize(p.size());
+  T* fields[kPer] = {grad->x.data(),       grad->y.data(),
+                     grad->conic_a.data(), grad->conic_b.data(),
+                     grad->conic_c.data(), grad->opacity.data(),
+                     grad->r.data(),       grad->g.data(),
+                     grad->b.data(),       grad->depth.data()};
+  const std::vector<std::uint32_t>& offsets = state.gaussian_offsets;
+  const std::vector<std::uint32_t>& entries = state.gaussian_entries;
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(p.size()); ++i) {
+    T sum[kPer] = {};
+    for (std::uint32_t j = offsets[i]; j < offsets[i + 1]; ++j) {
+      const T* e = &(*entry_grads)[kPer * static_cast<std::size_t>(entries[j])];
+      for (int f = 0; f < kPer; ++f) sum[f] += e[f];
+    }
+    for (int f = 0; f < kPer; ++f) fields[f][i] = sum[f];
   }
 }
 

@@ -71,8 +71,7 @@ void RasterizerT<T>::Intersect(const RasterCameraT<T>& camera,
                                RasterStateT<T>* state) {
   state->width = camera.width;
   state->height = camera.height;
-  IntersectTiles(state->projected, camera.width, camera.height, &sort_,
-                 &state->sorted_ids, &state->tile_ranges);
+  IntersectTiles(&sort_, state);
   state->stats.tile_entries = state->sorted_ids.size();
 }
 

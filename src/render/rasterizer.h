@@ -117,6 +117,11 @@ struct RasterStateT {
   std::vector<std::uint32_t> sorted_ids;
   // [begin, end) into sorted_ids for each tile: 2 per tile, row-major.
   std::vector<std::uint32_t> tile_ranges;
+  // The inverse: Gaussian i's entries (positions in sorted_ids), in its
+  // tiles' row-major order, are gaussian_entries[gaussian_offsets[i] ..
+  // gaussian_offsets[i + 1]); the backward sums each Gaussian's gradient
+  // over them, Gaussians in parallel.
+  std::vector<std::uint32_t> gaussian_offsets, gaussian_entries;
   std::vector<T> final_transmittance;  // per pixel
   // Per pixel: one past the last entry of its tile that blended into it.
   std::vector<std::uint32_t> last_contributor;
@@ -134,6 +139,7 @@ struct ProjectedGradientsT {
   std::vector<T> r, g, b;                    // colour
   std::vector<T> depth;        // camera z (through expected depth)
   void Assign(std::size_t n);  // n zeros in every array
+  void Resize(std::size_t n);  // n values in every array, as they come
 };
 
 // Gradients of a loss with respect to the model's parameters, laid out as
@@ -146,10 +152,16 @@ struct GaussianGradientsT {
   void Assign(const GaussianModelT<T>& model);  // zeros, sized like the model
 };
 
-// The radix sort's buffers of the tile intersection, reused between calls.
+// The tile intersection's buffers, reused between calls: the visible
+// Gaussians and their depth keys (sorted), and a cursor per tile and
+// thread.
 struct TileSortBuffers {
-  std::vector<std::uint64_t> keys, key_scratch;
-  std::vector<std::uint32_t> id_scratch, offsets;
+  std::vector<std::uint32_t> order, order_scratch, keys, key_scratch, cursor;
+  struct Rect {  // a visible Gaussian's tiles [x0, x1) x [y0, y1)
+    int x0, x1, y0, y1;
+    std::uint32_t g, offset;  // its index and its first inverse entry
+  };
+  std::vector<Rect> rects;  // in depth order
 };
 
 // The stages composed, with the scratch buffers that make steady-state

@@ -9,14 +9,12 @@
 
 namespace pano4d {
 
-// Writes *sorted_ids (the Gaussian of each pair, by tile, then depth, then
-// index: a total order, the same whatever the threads) and *tile_ranges
-// ([begin, end) into sorted_ids per tile of a width x height image, 2 per
-// tile). Throws pano4d::Error beyond 2^32 pairs.
+// Fills state's sorted_ids (the Gaussian of each pair, by tile, then depth,
+// then index: a total order, the same whatever the threads), tile_ranges
+// ([begin, end) into sorted_ids per tile of its width x height image, 2 per
+// tile) and their inverse, gaussian_offsets and gaussian_entries, from its
+// projected Gaussians. Throws pano4d::Error beyond 2^32 pairs.
 template <typename T>
-void IntersectTiles(const ProjectedGaussiansT<T>& projected, int width,
-                    int height, TileSortBuffers* buffers,
-                    std::vector<std::uint32_t>* sorted_ids,
-                    std::vector<std::uint32_t>* tile_ranges);
+void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state);
 
 }  // namespace pano4d
