@@ -6,6 +6,15 @@
 #include "src/core/error.h"
 
 namespace pano4d {
+namespace {
+
+// An optimiser of fewer values than this updates on the calling thread:
+// starting a parallel region wakes the sleeping worker threads (passive
+// waits, src/cli/main.cc), which costs more than updating this many values
+// (docs/experiments/2026-12-03-rasterizer-and-trainer-speed.md).
+constexpr std::int64_t kMinParallelWork = 1 << 15;
+
+}  // namespace
 
 void AdamOptions::Check() const {
   if (!(beta1 >= 0 && beta1 < 1))
@@ -89,8 +98,11 @@ AdamStepStats Adam::Step(
   // One parallel region for every group (the groups are independent, so
   // no barrier between them): each region start wakes the worker threads,
   // which on a busy machine or with passive waits costs more than a
-  // small group's update.
-#pragma omp parallel reduction(+ : skipped)
+  // small group's update; an optimiser of few values (the motion bases',
+  // the appearance transforms') runs on the calling thread.
+  std::int64_t work = 0;
+  for (const Group& g : groups_) work += rows_ * g.width;
+#pragma omp parallel reduction(+ : skipped) if (work >= kMinParallelWork)
   for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
     Group& g = groups_[gi];
     const std::vector<float>* grad = gradients[gi];

@@ -118,7 +118,7 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
   b.moments.resize(pixels * kMoments);  // ... and vertically
   b.grads.resize(pixels * kGrads);
   b.blurred.resize(pixels * kGrads);
-  std::vector<double> ssim_rows(height), l1_rows(height);
+  std::vector<double> ssim_rows(height), l1_rows(height), mse_rows(height);
   if (d_rendered != nullptr) d_rendered->resize(n);
   const double scale = 1.0 / static_cast<double>(n);
   // d(ssim_weight (1 - mean S)) / dS.
@@ -200,7 +200,7 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
       double* blurred = &b.blurred[py * grad_stride];
       BlurColumn(b.rows.data(), height, py, grad_stride, blurred);
       const std::size_t first = static_cast<std::size_t>(py) * width * 3;
-      double l1 = 0;
+      double l1 = 0, mse = 0;
       for (int c = 0; c < 3; ++c) {
         const double *g_mu = blurred + c * width,
                      *g_xx = blurred + (3 + c) * width,
@@ -209,6 +209,7 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
           const std::size_t i = first + px * 3 + c;
           const double xv = x[i], yv = y[i], diff = xv - yv;
           l1 += std::abs(diff);
+          mse += diff * diff;
           if (d_rendered == nullptr) continue;
           // d|d|/dd = sign(d), 0 at 0 (a subgradient).
           const double d_l1 =
@@ -218,6 +219,7 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
         }
       }
       l1_rows[py] = l1;
+      mse_rows[py] = mse;
     }
   }
 
@@ -225,8 +227,10 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
   for (int py = 0; py < height; ++py) {
     loss.ssim += ssim_rows[py];
     loss.l1 += l1_rows[py];
+    loss.mse += mse_rows[py];
   }
   loss.l1 *= scale;
+  loss.mse *= scale;
   loss.ssim *= scale;
   loss.total = (1 - ssim_weight) * loss.l1 + ssim_weight * (1 - loss.ssim);
   return loss;

@@ -16,6 +16,7 @@ inline constexpr double kDefaultSsimWeight = 0.2;  // 3DGS's lambda_dssim
 struct PhotometricLoss {
   double l1 = 0.0;     // mean |r - t|
   double ssim = 0.0;   // mean SSIM
+  double mse = 0.0;    // mean (r - t)^2, for the PSNR a step reports
   double total = 0.0;  // the weighted loss above
 };
 

@@ -11,7 +11,7 @@ namespace pano4d {
 namespace {
 
 // Gaussians per block of the deterministic reduction of basis gradients.
-constexpr std::size_t kBlock = 1024;
+constexpr std::size_t kBlock = 256;
 
 template <typename T>
 using Vec3 = std::array<T, 3>;

@@ -71,7 +71,8 @@ double BlockSum(std::size_t n, Term&& term) {
   const std::ptrdiff_t blocks =
       static_cast<std::ptrdiff_t>((n + kSumBlock - 1) / kSumBlock);
   std::vector<double> sums(blocks, 0.0);
-#pragma omp parallel for schedule(static)
+  // One block is not worth waking the worker threads for.
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (std::ptrdiff_t b = 0; b < blocks; ++b) {
     const std::size_t end = std::min(n, (b + 1) * kSumBlock);
     for (std::size_t i = b * kSumBlock; i < end; ++i) sums[b] += term(i);
@@ -79,24 +80,6 @@ double BlockSum(std::size_t n, Term&& term) {
   double total = 0;
   for (double v : sums) total += v;
   return total;
-}
-
-// Zeros in *g sized like `model`, written in parallel: a step's gradient
-// arrays hold millions of values.
-void ZeroGradients(const GaussianModel& model, GaussianGradients* g) {
-  const std::vector<float>* sources[] = {&model.means, &model.log_scales,
-                                         &model.quats, &model.opacities,
-                                         &model.sh};
-  std::vector<float>* arrays[] = {&g->means,     &g->log_scales, &g->quats,
-                                  &g->opacities, &g->sh,         &g->means2d};
-  for (int k = 0; k < 6; ++k)
-    arrays[k]->resize(k < 5 ? sources[k]->size() : 2 * model.size());
-#pragma omp parallel
-  for (std::vector<float>* v : arrays) {
-    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(v->size());
-#pragma omp for schedule(static) nowait
-    for (std::ptrdiff_t i = 0; i < size; ++i) (*v)[i] = 0.0f;
-  }
 }
 
 }  // namespace
@@ -256,22 +239,22 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
                        const GaussianGradients* direct) {
   rasterizer_.Backward(composed_, camera, Settings(), state, out, d_out,
                        &grads_);
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(composed_.size());
-  if (direct != nullptr) {
-    for (auto [from, to] : {std::pair{&direct->means, &grads_.means},
-                            {&direct->log_scales, &grads_.log_scales},
-                            {&direct->quats, &grads_.quats}}) {
-      if (from->empty()) continue;
-      const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(to->size());
-#pragma omp parallel for schedule(static)
-      for (std::ptrdiff_t i = 0; i < count; ++i) (*to)[i] += (*from)[i];
-    }
-  }
   if (gradient_hook) gradient_hook(&grads_);
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(composed_.size());
+  // The losses' own gradients on the composed Gaussians (null: none).
+  const auto given = [&](std::vector<float> GaussianGradients::*field) {
+    return direct != nullptr && !(direct->*field).empty()
+               ? (direct->*field).data()
+               : nullptr;
+  };
+  const float* direct_means = given(&GaussianGradients::means);
+  const float* direct_log_scales = given(&GaussianGradients::log_scales);
+  const float* direct_quats = given(&GaussianGradients::quats);
 
-  // A Gaussian with any non-finite gradient is left out of this step (its
-  // gradient zeroed, so that it cannot reach the shared motion bases), and
-  // counted. The others' gradients join the static or dynamic groups'.
+  // The losses' own gradients join the rasterizer's; a Gaussian with any
+  // non-finite gradient is left out of this step (its gradient zeroed, so
+  // that it cannot reach the shared motion bases), and counted. The others'
+  // gradients join the static or dynamic groups'.
   const std::ptrdiff_t ns = static_cast<std::ptrdiff_t>(scene_.statics.size());
   const int k3 = composed_.sh_coefficients() * 3;
   std::int64_t bad = 0;
@@ -282,6 +265,12 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
     float* quats = &grads_.quats[i * 4];
     float* sh = &grads_.sh[i * k3];
     float* means2d = &grads_.means2d[i * 2];
+    if (direct_means)
+      for (int j = 0; j < 3; ++j) means[j] += direct_means[i * 3 + j];
+    if (direct_log_scales)
+      for (int j = 0; j < 3; ++j) log_scales[j] += direct_log_scales[i * 3 + j];
+    if (direct_quats)
+      for (int j = 0; j < 4; ++j) quats[j] += direct_quats[i * 4 + j];
     bool finite = std::isfinite(grads_.opacities[i]);
     for (int j = 0; j < 3; ++j)
       finite =
@@ -369,30 +358,23 @@ StepReport Trainer::Step() {
   }
   report.l1 = photo.l1;
   report.ssim = photo.ssim;
-  const double mse = BlockSum(rendered->size(),
-                              [&](std::size_t i) {
-                                const double e =
-                                    double((*rendered)[i]) - view.rgb[i];
-                                return e * e;
-                              }) /
-                     static_cast<double>(out_.rgb.size());
-  report.psnr = PsnrFromMse(mse);
+  report.psnr = PsnrFromMse(photo.mse);
   std::vector<float>& d_depth = d_out_.depth;
   d_depth.clear();
   const float median = median_depth_[&view - views_.data()];
   if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {
-    d_depth.resize(view.depth.size());
-    const std::size_t count = static_cast<std::size_t>(BlockSum(
-        view.depth.size(), [&](std::size_t p) { return view.depth[p] > 0; }));
+    d_depth.assign(view.depth.size(), 0.0f);
+    std::size_t count = 0;
+    for (float d : view.depth) count += d > 0;
+    double sum = 0;
     const double scale = 1.0 / (static_cast<double>(count) * median);
     const float g = static_cast<float>(options_.depth_weight * scale);
-    const double sum = BlockSum(view.depth.size(), [&](std::size_t p) {
-      d_depth[p] = 0.0f;
-      if (!(view.depth[p] > 0)) return 0.0;
+    for (std::size_t p = 0; p < view.depth.size(); ++p) {
+      if (!(view.depth[p] > 0)) continue;
       const float diff = out_.depth[p] - view.depth[p];
+      sum += std::abs(diff);
       d_depth[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
-      return double(std::abs(diff));
-    });
+    }
     report.depth = options_.depth_weight * sum * scale;
   }
   direct_grads_.means.clear();
@@ -431,8 +413,8 @@ StepReport Trainer::Step() {
   }
 
   start = Clock::now();
-  ZeroGradients(scene_.statics, &static_grads_);
-  ZeroGradients(scene_.dynamics, &dynamic_grads_);
+  static_grads_.Assign(scene_.statics);
+  dynamic_grads_.Assign(scene_.dynamics);
   logit_grads_.assign(scene_.logits.size(), 0.0f);
   basis_grads_.num_bases = scene_.bases.num_bases;
   basis_grads_.num_times = scene_.bases.num_times;
