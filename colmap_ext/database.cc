@@ -2,14 +2,24 @@
 
 #include <sqlite3.h>
 
+#include <functional>
+#include <map>
 #include <memory>
 
 #include "src/core/error.h"
 
 namespace pano4d {
+namespace {
 
-std::vector<DatabaseImage> ReadDatabaseImages(
-    const std::filesystem::path& database) {
+// COLMAP packs an image pair into one id: id1 * kMaxImages + id2, id1 < id2
+// (Database::ImagePairToPairId).
+constexpr std::int64_t kMaxImages = 2147483647;
+
+// Runs `sql` on the database opened read-only and calls `row` per result
+// row. Throws pano4d::Error naming the file and `what` on failure.
+void Query(const std::filesystem::path& database, const char* sql,
+           const std::string& what,
+           const std::function<void(sqlite3_stmt*)>& row) {
   if (!std::filesystem::is_regular_file(database))
     throw Error::In(database.string(), "no such COLMAP database");
   sqlite3* raw = nullptr;
@@ -22,30 +32,74 @@ std::vector<DatabaseImage> ReadDatabaseImages(
                     std::string("cannot open: ") + sqlite3_errstr(open));
   }
   sqlite3_stmt* raw_statement = nullptr;
-  if (sqlite3_prepare_v2(db.get(),
-                         "SELECT image_id, camera_id, name FROM images "
-                         "ORDER BY image_id",
-                         -1, &raw_statement, nullptr) != SQLITE_OK) {
-    throw Error::In(database.string(), std::string("not a COLMAP database: ") +
-                                           sqlite3_errmsg(db.get()));
+  if (sqlite3_prepare_v2(db.get(), sql, -1, &raw_statement, nullptr) !=
+      SQLITE_OK) {
+    throw Error::In(database.string(), "not a COLMAP database (reading " +
+                                           what +
+                                           "): " + sqlite3_errmsg(db.get()));
   }
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> statement(
       raw_statement, &sqlite3_finalize);
-  std::vector<DatabaseImage> images;
   int step;
-  while ((step = sqlite3_step(statement.get())) == SQLITE_ROW) {
-    const auto* name =
-        reinterpret_cast<const char*>(sqlite3_column_text(statement.get(), 2));
-    images.push_back(
-        {static_cast<std::uint32_t>(sqlite3_column_int64(statement.get(), 0)),
-         static_cast<std::uint32_t>(sqlite3_column_int64(statement.get(), 1)),
-         name ? name : ""});
-  }
+  while ((step = sqlite3_step(statement.get())) == SQLITE_ROW)
+    row(statement.get());
   if (step != SQLITE_DONE) {
     throw Error::In(database.string(),
-                    std::string("reading images: ") + sqlite3_errmsg(db.get()));
+                    "reading " + what + ": " + sqlite3_errmsg(db.get()));
+  }
+}
+
+}  // namespace
+
+std::vector<DatabaseImage> ReadDatabaseImages(
+    const std::filesystem::path& database) {
+  std::vector<DatabaseImage> images;
+  Query(database,
+        "SELECT image_id, camera_id, name FROM images ORDER BY image_id",
+        "images", [&](sqlite3_stmt* s) {
+          const auto* name =
+              reinterpret_cast<const char*>(sqlite3_column_text(s, 2));
+          images.push_back(
+              {static_cast<std::uint32_t>(sqlite3_column_int64(s, 0)),
+               static_cast<std::uint32_t>(sqlite3_column_int64(s, 1)),
+               name ? name : ""});
+        });
+  std::map<std::uint32_t, int> keypoints;
+  // feature_extractor creates the table; a database made by hand may not.
+  bool has_keypoints = false;
+  Query(database,
+        "SELECT name FROM sqlite_master WHERE type='table' AND "
+        "name='keypoints'",
+        "tables", [&](sqlite3_stmt*) { has_keypoints = true; });
+  if (has_keypoints) {
+    Query(database, "SELECT image_id, rows FROM keypoints", "keypoints",
+          [&](sqlite3_stmt* s) {
+            keypoints[static_cast<std::uint32_t>(sqlite3_column_int64(s, 0))] =
+                sqlite3_column_int(s, 1);
+          });
+  }
+  for (DatabaseImage& image : images) {
+    const auto found = keypoints.find(image.image_id);
+    if (found != keypoints.end()) image.keypoints = found->second;
   }
   return images;
+}
+
+std::vector<DatabasePair> ReadDatabasePairs(
+    const std::filesystem::path& database) {
+  std::vector<DatabasePair> pairs;
+  Query(database, "SELECT pair_id, rows, config FROM two_view_geometries",
+        "two_view_geometries", [&](sqlite3_stmt* s) {
+          const std::int64_t pair_id = sqlite3_column_int64(s, 0);
+          DatabasePair p;
+          p.image_id2 = static_cast<std::uint32_t>(pair_id % kMaxImages);
+          p.image_id1 =
+              static_cast<std::uint32_t>((pair_id - p.image_id2) / kMaxImages);
+          p.inliers = sqlite3_column_int(s, 1);
+          p.config = sqlite3_column_int(s, 2);
+          pairs.push_back(p);
+        });
+  return pairs;
 }
 
 }  // namespace pano4d

@@ -12,14 +12,41 @@ struct DatabaseImage {
   std::uint32_t image_id = 0;
   std::uint32_t camera_id = 0;
   std::string name;
+  int keypoints = 0;  // rows of its keypoints table entry; 0 when none
 };
 
-// The images table of a COLMAP database, opened read-only, by image id.
-// feature_extractor numbers images in the order its threads finish, so the
-// ids of a model for point_triangulator must come from here. Throws
-// pano4d::Error naming the file when it is missing or not a COLMAP
-// database.
+// COLMAP's verdict on an image pair (TwoViewGeometry::ConfigurationType,
+// the same numbers from 3.8 to 4.1).
+enum class PairConfig {
+  kUndefined = 0,
+  kDegenerate = 1,
+  kCalibrated = 2,
+  kUncalibrated = 3,
+  kPlanar = 4,
+  kPanoramic = 5,
+  kPlanarOrPanoramic = 6,
+  kWatermark = 7,
+  kMultiple = 8,
+};
+
+// A verified pair of the two_view_geometries table.
+struct DatabasePair {
+  std::uint32_t image_id1 = 0, image_id2 = 0;
+  int inliers = 0;  // verified matches (the table's rows)
+  int config = 0;   // PairConfig
+};
+
+// The images table of a COLMAP database, opened read-only, by image id,
+// with each image's keypoint count. feature_extractor numbers images in the
+// order its threads finish, so the ids of a model for point_triangulator
+// must come from here. Throws pano4d::Error naming the file when it is
+// missing or not a COLMAP database.
 std::vector<DatabaseImage> ReadDatabaseImages(
+    const std::filesystem::path& database);
+
+// The two_view_geometries table (empty before a matcher ran). Throws as
+// ReadDatabaseImages.
+std::vector<DatabasePair> ReadDatabasePairs(
     const std::filesystem::path& database);
 
 }  // namespace pano4d

@@ -12,6 +12,7 @@
 #include "colmap_ext/database.h"
 #include "colmap_ext/masks.h"
 #include "colmap_ext/model.h"
+#include "colmap_ext/sfm_diagnosis.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
@@ -422,17 +423,20 @@ SfmReport RunSfm(const SfmOptions& o) {
       WriteColmapMasks(masks, names, masks_dir);
       WriteDynamicMasks(masks, names, workspace.dynamic_masks());
       PANO4D_LOG(kInfo) << "sfm: " << stats.BriefReport();
-      report.mean_dynamic_fraction = stats.MeanDynamicFraction();
     });
   }
-
-  if (o.dynamic_masks && report.steps.back().skipped) {
-    // Masks from an earlier run: their fraction, from the files.
+  // Each frame's moving share, from the mask files (this run's or an
+  // earlier one's).
+  std::map<std::string, double> moving_fraction;
+  if (o.dynamic_masks) {
     double sum = 0;
     for (const fs::path& f : frames) {
-      const cv::Mat mask = ReadMask(
-          MaskPathFor(workspace.dynamic_masks(), f.filename().string()));
-      sum += cv::countNonZero(mask) / static_cast<double>(mask.total());
+      const std::string name = f.filename().string();
+      const cv::Mat mask =
+          ReadMask(MaskPathFor(workspace.dynamic_masks(), name));
+      moving_fraction[name] =
+          cv::countNonZero(mask) / static_cast<double>(mask.total());
+      sum += moving_fraction[name];
     }
     report.mean_dynamic_fraction = sum / frames.size();
   }
@@ -577,10 +581,18 @@ SfmReport RunSfm(const SfmOptions& o) {
   for (const ColmapPoint3D& p : model.points3D) error_sum += p.error;
   report.mean_reprojection_error =
       model.points3D.empty() ? 0.0 : error_sum / model.points3D.size();
+  std::set<std::string> posed;
+  for (const ColmapImage& image : model.images) posed.insert(image.name);
+  report.diagnosis =
+      DiagnoseSfm(ReadFrameEvidence(database, posed, moving_fraction));
+  // Frames the database lacks (never imported) are unposed too.
+  report.diagnosis.frames = std::max(report.diagnosis.frames, report.frames);
 
   nlohmann::json summary = {
       {"frames", report.frames},
       {"registered", report.registered},
+      {"posed_fraction", report.diagnosis.PosedFraction()},
+      {"diagnosis", report.diagnosis.ToJson()},
       {"points3D", report.points3D},
       {"mean_reprojection_error_px", report.mean_reprojection_error},
       {"models", report.models},

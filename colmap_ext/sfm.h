@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "colmap_ext/sfm_diagnosis.h"
 #include "src/core/posed_camera.h"
 
 namespace pano4d {
@@ -64,13 +65,16 @@ struct SfmReport {
   std::filesystem::path model;           // the model later stages use
   std::filesystem::path images;          // the images that model refers to
   double mean_dynamic_fraction = 0.0;
+  // The share of frames posed and, for those left out, why.
+  SfmDiagnosis diagnosis;
   std::vector<SfmStepReport> steps;
 };
 
 // Runs the steps that are not complete yet: frames, dynamic masks, colmap
 // feature_extractor, matcher, mapper (the largest model becomes
 // WS/sparse/0), image_undistorter when the camera model has distortion.
-// Writes WS/pano4d/sfm.json and WS/pano4d/logs/timings.json. Throws
+// Writes WS/pano4d/sfm.json (with posed_fraction and the diagnosis of the
+// unposed frames) and WS/pano4d/logs/timings.json. Throws
 // pano4d::Error naming the failed step, its log and the likely remedy.
 SfmReport RunSfm(const SfmOptions& options);
 

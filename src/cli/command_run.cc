@@ -35,6 +35,12 @@ void AddRunCommand(CLI::App& app, Action* action) {
   AddHoldoutOption(sub, &o->depth.holdout);
   AddDepthDirOption(sub, &o->depth.depth_dir);
   AddMaxSizeOption(sub, &o->sfm.max_size);
+  sub->add_option("--min-posed", o->min_posed,
+                  "Stop after sfm when COLMAP poses fewer than this share of "
+                  "the frames, with the cause it found and what to try (0: "
+                  "fit whatever was posed)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   AddFitOptions(sub, &o->fit);
   sub->footer(
       "Writes WS/pano4d/plan.json (the plan, the facts it was made from, and "

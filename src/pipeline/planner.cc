@@ -1,5 +1,6 @@
 #include "src/pipeline/planner.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -20,9 +21,17 @@ std::string Percent(double fraction) {
 
 StageDecision Sfm(const PlanFacts& f) {
   if (!f.poses_given) {
-    return {"sfm", true, false,
-            "no poses: COLMAP estimates them from the frames (feature "
-            "extraction, matching, mapping, undistortion)"};
+    std::string why =
+        "no poses: COLMAP estimates them from the frames (feature "
+        "extraction, matching, mapping, undistortion); the run stops if it "
+        "poses fewer than " +
+        Percent(f.min_posed) + " of them (--min-posed)";
+    if (f.sfm_frames && f.sfm_posed) {
+      why += "; posed " + std::to_string(*f.sfm_posed) + " of " +
+             std::to_string(*f.sfm_frames) + " (" +
+             Percent(*f.sfm_posed / std::max(1.0, 1.0 * *f.sfm_frames)) + ")";
+    }
+    return {"sfm", true, false, why};
   }
   if (f.input == InputKind::kDataset && f.depth_source != kDepthFromDataset) {
     return {"sfm", true, false,
@@ -172,6 +181,16 @@ nlohmann::json Plan::ToJson() const {
         {"unseen_fraction", optional(facts.unseen_fraction)},
         {"targets_are_training_cameras", facts.targets_are_training_cameras},
         {"ground_truth", facts.ground_truth},
+        {"sfm_frames", facts.sfm_frames ? nlohmann::json(*facts.sfm_frames)
+                                        : nlohmann::json()},
+        {"sfm_posed",
+         facts.sfm_posed ? nlohmann::json(*facts.sfm_posed) : nlohmann::json()},
+        {"sfm_posed_fraction",
+         facts.sfm_frames && facts.sfm_posed
+             ? nlohmann::json(*facts.sfm_posed /
+                              std::max(1.0, 1.0 * *facts.sfm_frames))
+             : nlohmann::json()},
+        {"min_posed", facts.min_posed},
         {"eval_requested", facts.eval_requested},
         {"no_expansion", facts.no_expansion},
         {"no_motion", facts.no_motion}}},

@@ -16,6 +16,10 @@ namespace pano4d {
 enum class InputKind { kVideo, kImages, kColmap, kDataset };
 const char* InputKindName(InputKind kind);
 
+// The default of --min-posed: a fit of fewer posed frames than this share
+// of a video is a fit of another, shorter video, and users found out only
+// from the results (issue 36: 12 of 145 frames fitted in silence).
+constexpr double kDefaultMinPosed = 0.8;
 // What is known about the input. Facts a stage finds out later (the dynamic
 // masks come from `sfm` or `depth`) are empty until then; the plan says
 // when they will be decided.
@@ -41,6 +45,11 @@ struct PlanFacts {
   // theirs lies outside the training coverage, masks or not.
   bool targets_are_training_cameras = false;
   bool ground_truth = false;  // validation frames with images
+  // After sfm: the frames COLMAP was given and those it posed (empty
+  // before, and when the poses are given).
+  std::optional<int> sfm_frames, sfm_posed;
+  // `pano4d run` stops after sfm below this share of frames posed.
+  double min_posed = kDefaultMinPosed;
   // The user's word, which overrides the facts.
   bool eval_requested = false;
   bool no_expansion = false;

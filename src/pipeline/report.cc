@@ -15,6 +15,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/strings.h"
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/scene_outputs.h"
 #include "src/render/ply.h"
@@ -281,6 +282,19 @@ ReportSummary WriteReport(const Workspace& ws) {
      << fit.value("iterations", 0) << " fit iterations, "
      << fit.value("static_gaussians", 0) << " static and "
      << fit.value("dynamic_gaussians", 0) << " dynamic Gaussians.\n\n";
+  const nlohmann::json facts = plan.value("facts", nlohmann::json::object());
+  if (facts.value("sfm_frames", nlohmann::json()).is_number()) {
+    const int given = facts["sfm_frames"].get<int>();
+    const int posed = facts.value("sfm_posed", 0);
+    md << "COLMAP posed " << posed << " of " << given << " frames ("
+       << StringPrintf("%.1f%%", 100.0 * posed / std::max(1, given)) << ")";
+    if (posed < given) {
+      md << "; the " << given - posed
+         << " unposed frames are not in the fit (why: "
+         << ws.sfm_json().string() << ", key diagnosis)";
+    }
+    md << ".\n\n";
+  }
   md << "## Stages\n\n" << PlanTable(plan) << "\n";
   if (evaluated) {
     md << "## Metrics (beside the published rows)\n\n";

@@ -1,5 +1,6 @@
 #include "src/pipeline/run.h"
 
+#include <cmath>
 #include <cstdio>
 #include <ostream>
 #include <string>
@@ -168,6 +169,7 @@ nlohmann::json RunOptions::ToJson() const {
           {"eval", eval},
           {"lpips_weights", lpips_weights.string()},
           {"sfm", sfm.ToJson()},
+          {"min_posed", min_posed},
           {"depth", depth.ToJson()},
           {"fit", fit.ToJson()}};
 }
@@ -197,8 +199,18 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.input_path = (s.video.empty() ? s.images : s.video).string();
   }
   f.depth_dir = o.depth.depth_dir.string();
-  // A workspace that an earlier run took through depth already knows.
+  f.min_posed = o.min_posed;
+  // A workspace that an earlier run took through sfm or depth already
+  // knows.
   const Workspace ws(o.workspace);
+  if (!f.poses_given && fs::exists(ws.sfm_json())) {
+    const nlohmann::json d =
+        ReadJson(ws.sfm_json()).value("diagnosis", nlohmann::json());
+    if (d.is_object() && d.contains("frames") && d.contains("posed")) {
+      f.sfm_frames = d["frames"].get<int>();
+      f.sfm_posed = d["posed"].get<int>();
+    }
+  }
   if (fs::exists(ws.frames_json()))
     f.dynamic_fraction = DynamicFraction(ReadWorkspaceFrames(ws.root()));
   return f;
@@ -228,6 +240,10 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   }
   o.fit.Check();
   o.depth.Check();
+  if (!(o.min_posed >= 0 && o.min_posed <= 1)) {
+    throw Error("pano4d run", "--min-posed", std::to_string(o.min_posed),
+                "expected a share of the frames between 0 and 1");
+  }
   // One factor for every stage: the protocol's, unless given.
   if (!o.dataset.empty())
     o.depth.factor = LoadDataset(o.dataset, o.depth.factor).factor;
@@ -256,6 +272,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
                       << t.WallSeconds() << " s";
   };
 
+  std::optional<SfmDiagnosis> posed;
   if (plan.Runs("sfm")) {
     stage("sfm", [&] {
       SfmStageOptions s;
@@ -265,6 +282,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       s.factor = o.depth.factor;
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
+      posed = r.report.diagnosis;
       std::string ran;
       for (const SfmStepReport& step : r.report.steps)
         if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
@@ -272,6 +290,30 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
                  ? StageResult{kReused, "every step's inputs are unchanged"}
                  : StageResult{"done", "ran " + ran};
     });
+  }
+  // Estimated poses: the share posed is a fact of the plan, and below
+  // --min-posed the end of the run.
+  if (posed && !facts.poses_given) {
+    facts.sfm_frames = posed->frames;
+    facts.sfm_posed = posed->posed;
+    plan = MakePlan(facts);
+    WritePlan(ws, o, plan, summary.stages);
+    if (posed->PosedFraction() < o.min_posed) {
+      summary.stages["sfm"]["status"] = "too few frames posed";
+      WritePlan(ws, o, plan, summary.stages);
+      throw Error(
+          "pano4d run", "sfm",
+          StringPrintf("%d of %d frames posed (%.1f%%)", posed->posed,
+                       posed->frames, 100 * posed->PosedFraction()),
+          StringPrintf("below --min-posed %.0f%%, so the fit would see a "
+                       "fraction of the video. Cause: %s. To try: %s; or "
+                       "--min-posed %.2f to fit the posed frames anyway "
+                       "(details: %s)",
+                       100 * o.min_posed, posed->Cause().c_str(),
+                       posed->Remedy().c_str(),
+                       std::floor(100 * posed->PosedFraction()) / 100,
+                       ws.sfm_json().c_str()));
+    }
   }
   // Reused while its stamp records the same inputs; when it runs, the fit
   // that followed an earlier run of it starts again.
@@ -306,17 +348,17 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
         depth_ran ? std::optional<std::string>("the depth stage ran again")
                   : CheckpointMismatch(ws, used, inputs.train);
     if (!mismatch && FitComplete(ws, used.trainer.iterations))
-      return StageResult{kReused, "a finished fit with these options on "
-                                  "these frames"};
+      return StageResult{kReused,
+                         "a finished fit with these options on "
+                         "these frames"};
     if (mismatch && fs::exists(ws.checkpoint())) {
       PANO4D_LOG(kInfo) << "run: fit: the workspace's fit is not this one's ("
                         << *mismatch << "); its products are removed and the "
                         << "fit starts from the beginning";
       // Else a fit that stops early would leave them to be taken for its
       // own: the old checkpoint resumed, the old fit.json read as complete.
-      for (const fs::path& p :
-           {ws.checkpoint().parent_path(), ws.fit_json(), ws.expansion(),
-            ws.panorama()})
+      for (const fs::path& p : {ws.checkpoint().parent_path(), ws.fit_json(),
+                                ws.expansion(), ws.panorama()})
         fs::remove_all(p);
     }
     f.resume = !mismatch;

@@ -31,6 +31,9 @@ struct RunOptions {
   // false are the user's word (the plan may leave motion or expansion out
   // as well).
   SfmOptions sfm;
+  // After sfm, the run stops with the diagnosis when fewer than this share
+  // of the frames are posed (0: fit whatever was posed).
+  double min_posed = kDefaultMinPosed;
   DepthOptions depth;
   FitOptions fit;
   nlohmann::json ToJson() const;  // plan.json's "options"
@@ -50,7 +53,10 @@ PlanFacts GatherFacts(const RunOptions& options);
 
 // Plans, writes the plan table to `progress` (when given) and
 // WS/pano4d/plan.json, and runs the stages. Throws pano4d::Error naming the
-// input, before any work when the plan cannot be run.
+// input, before any work when the plan cannot be run, and after sfm when
+// it posed fewer than min_posed of the frames (naming the share, the cause
+// and what to try; plan.json records the sfm stage as "too few frames
+// posed").
 RunSummary RunPipeline(const RunOptions& options,
                        std::ostream* progress = nullptr);
 

@@ -65,12 +65,16 @@ std::string SfmComparison::BriefReport() const {
 std::string SfmStageSummary::FullReport() const {
   const SfmReport& r = report;
   std::string s = StringPrintf(
-      "pano4d sfm: %d of %d frames registered (%.1f%%), %d points, mean "
-      "reprojection error %.3f px, %d model(s)\n"
-      "  model: %s\n  images: %s\n",
-      r.registered, r.frames, 100.0 * r.registered / std::max(1, r.frames),
-      r.points3D, r.mean_reprojection_error, r.models, r.model.c_str(),
-      r.images.c_str());
+      "pano4d sfm: %d of %d frames posed (%.1f%%), %d points, mean "
+      "reprojection error %.3f px, %d model(s)\n",
+      r.registered, r.frames, 100.0 * r.diagnosis.PosedFraction(), r.points3D,
+      r.mean_reprojection_error, r.models);
+  if (!r.diagnosis.AllPosed()) {
+    s += "  not posed: " + r.diagnosis.Cause() +
+         "\n  to pose more: " + r.diagnosis.Remedy() + "\n";
+  }
+  s += StringPrintf("  model: %s\n  images: %s\n", r.model.c_str(),
+                    r.images.c_str());
   for (const SfmStepReport& step : r.steps) {
     s += StringPrintf("  %-20s %8.1f s%s\n", step.step.c_str(), step.seconds,
                       step.skipped ? "  (complete from an earlier run)" : "");

@@ -48,6 +48,28 @@ TEST(PlannerTest, AVideoRunsEveryStageButEvaluation) {
   EXPECT_NE(plan.Get("eval").why.find("no ground truth"), std::string::npos);
 }
 
+TEST(PlannerTest, TheShareOfFramesPosedIsAFactOfThePlan) {
+  PlanFacts f = Video();
+  f.min_posed = 0.9;
+  const Plan before = MakePlan(f);
+  EXPECT_NE(before.Get("sfm").why.find("fewer than 90.00% of them "
+                                       "(--min-posed)"),
+            std::string::npos)
+      << before.Get("sfm").why;
+  EXPECT_TRUE(before.ToJson()["facts"]["sfm_posed_fraction"].is_null());
+  f.sfm_frames = 145;
+  f.sfm_posed = 12;
+  const Plan after = MakePlan(f);
+  EXPECT_NE(after.Get("sfm").why.find("posed 12 of 145 (8.28%)"),
+            std::string::npos)
+      << after.Get("sfm").why;
+  const nlohmann::json facts = after.ToJson()["facts"];
+  EXPECT_EQ(facts["sfm_frames"], 145);
+  EXPECT_EQ(facts["sfm_posed"], 12);
+  EXPECT_NEAR(facts["sfm_posed_fraction"].get<double>(), 12.0 / 145, 1e-12);
+  EXPECT_DOUBLE_EQ(facts["min_posed"].get<double>(), 0.9);
+}
+
 TEST(PlannerTest, GivenPosesAndDepthLeaveSfmAndDepthOut) {
   PlanFacts colmap = Video();
   colmap.input = InputKind::kColmap;

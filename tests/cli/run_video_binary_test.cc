@@ -1,0 +1,110 @@
+// `pano4d run --video` on a video that COLMAP can pose only in part: the
+// run stops after sfm with the share posed and the cause, instead of
+// fitting a fraction of the video (label colmap; says COLMAP MISSING and
+// skips without it).
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "src/core/file.h"
+#include "src/core/image.h"
+#include "src/core/json.h"
+#include "src/core/subprocess.h"
+#include "src/datasets/dataset.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunPano4d;
+using testing::Slurp;
+
+// Textured frames the mapper poses, then as many uniformly grey frames,
+// which have no keypoints at all.
+constexpr int kTexturedFrames = 12;
+
+const nlohmann::json& Stage(const nlohmann::json& plan,
+                            const std::string& name) {
+  for (const auto& s : plan["stages"])
+    if (s["stage"] == name) return s;
+  ADD_FAILURE() << "no stage " << name << " in " << plan.dump(2);
+  return plan;
+}
+
+class RunVideoTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!FindOnPath("colmap")) return;
+    dir_ = new testing::TempDir();
+    const fs::path log = dir_->path() / "synth.log";
+    ASSERT_EQ(RunPano4d("synth --preset small --static --seed 0 --out '" +
+                            (dir_->path() / "scene").string() + "'",
+                        log),
+              0)
+        << Slurp(log);
+    const Dataset scene = LoadDataset(dir_->path() / "scene", 1);
+    ASSERT_GE(scene.train.size(), static_cast<std::size_t>(kTexturedFrames));
+    const cv::Mat first = ReadImage(scene.train[0].rgb).ToBgr8();
+    cv::VideoWriter writer((dir_->path() / "half.avi").string(),
+                           cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0,
+                           first.size());
+    ASSERT_TRUE(writer.isOpened());
+    for (int i = 0; i < kTexturedFrames; ++i)
+      writer.write(ReadImage(scene.train[i].rgb).ToBgr8());
+    for (int i = 0; i < kTexturedFrames; ++i)
+      writer.write(cv::Mat(first.size(), CV_8UC3, cv::Scalar::all(128)));
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  void SetUp() override {
+    if (!FindOnPath("colmap"))
+      GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH; install it "
+                      "with `apt-get install colmap` (scripts/setup.sh does)";
+  }
+  static testing::TempDir* dir_;
+};
+testing::TempDir* RunVideoTest::dir_ = nullptr;
+
+TEST_F(RunVideoTest, TooFewFramesPosedStopsTheRunNamingShareAndCause) {
+  const fs::path ws = dir_->path() / "ws";
+  const fs::path log = dir_->path() / "run.log";
+  const std::string run =
+      "run --video '" + (dir_->path() / "half.avi").string() +
+      "' --workspace '" + ws.string() + "' --iterations 20 --no-expansion";
+  const int status = RunPano4d(run, log);
+  const std::string out = Slurp(log);
+  ASSERT_NE(status, 0) << out;
+  const std::size_t error = out.find("error:");
+  std::printf("the run's error: %s\n", error == std::string::npos
+                                           ? "(none)"
+                                           : out.substr(error).c_str());
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
+  const int posed = plan["facts"]["sfm_posed"].get<int>();
+  EXPECT_EQ(plan["facts"]["sfm_frames"].get<int>(), 2 * kTexturedFrames);
+  EXPECT_LE(posed, kTexturedFrames);
+  EXPECT_GE(posed, 3) << "the textured half should be posed";
+  // The plan said so before the run began, and the error says the share,
+  // the cause and what to try.
+  EXPECT_NE(Stage(plan, "sfm")["why"].get<std::string>().find("--min-posed"),
+            std::string::npos);
+  EXPECT_EQ(plan["results"]["sfm"]["status"], "too few frames posed");
+  EXPECT_NE(out.find(std::to_string(posed) + " of " +
+                     std::to_string(2 * kTexturedFrames) + " frames posed"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("too few features"), std::string::npos) << out;
+  EXPECT_NE(out.find("--min-posed"), std::string::npos) << out;
+  // Nothing after sfm ran.
+  EXPECT_FALSE(fs::exists(ws / "pano4d/frames.json"));
+  EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+  const nlohmann::json sfm = ReadJson(ws / "pano4d/sfm.json");
+  EXPECT_EQ(sfm["diagnosis"]["cause"], "too few features");
+  EXPECT_GE(sfm["diagnosis"]["unposed_causes"]["too few features"].get<int>(),
+            kTexturedFrames);
+}
+
+}  // namespace
+}  // namespace pano4d
