@@ -529,19 +529,28 @@ SfmReport RunSfm(const SfmOptions& o) {
         [&] {
           fs::remove_all(sparse);
           EnsureDirectory(sparse);
-          colmap.Run("mapper",
-                     {"--database_path", database.string(), "--image_path",
-                      images_dir.string(), "--output_path", sparse.string()},
-                     logs / "mapper.log",
-                     "too few matches: frames need texture and overlap (lower "
-                     "--stride, or try --matcher exhaustive)");
+          // Nothing posed: the diagnosis says why, in place of a generic
+          // remedy.
+          const auto nothing_posed = [&](const std::string& colmap_said) {
+            const SfmDiagnosis d =
+                DiagnoseSfm(ReadFrameEvidence(database, {}, moving_fraction));
+            return Error(
+                "colmap", "mapper",
+                "0 of " + std::to_string(report.frames) + " frames posed",
+                "Cause: " + d.Cause() + ". To try: " + d.Remedy() + " (" +
+                    colmap_said + ")");
+          };
+          try {
+            colmap.Run("mapper",
+                       {"--database_path", database.string(), "--image_path",
+                        images_dir.string(), "--output_path", sparse.string()},
+                       logs / "mapper.log");
+          } catch (const Error& e) {
+            throw nothing_posed(e.problem());
+          }
           if (SelectLargestModel(sparse) == 0) {
-            throw Error(
-                "colmap", "mapper", "",
-                "produced no model (log: " + (logs / "mapper.log").string() +
-                    "); likely remedy: the frames do not overlap enough or "
-                    "lack texture: lower --stride, or try --matcher "
-                    "exhaustive");
+            throw nothing_posed("colmap mapper wrote no model; log: " +
+                                (logs / "mapper.log").string());
           }
         });
   }

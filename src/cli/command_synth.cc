@@ -43,6 +43,15 @@ void AddSynthCommand(CLI::App& app, Action* action) {
                 "arc), object sizes, texture scale and an object close to a "
                 "validation camera: scenes the default settings were not "
                 "tuned on");
+  sub->add_option_function<std::string>(
+         "--trajectory",
+         [o](const std::string& name) {
+           o->synth.trajectory = synth::TrainingMotionFromName(name);
+         },
+         "How the training camera moves: arc (default), slow-arc (an "
+         "eighth of the arc: little parallax), pan (a fixed centre, "
+         "turning), static-camera; the cases casual videos bring SfM")
+      ->check(CLI::IsMember({"arc", "slow-arc", "pan", "static-camera"}));
   sub->callback([action, o] {
     *action = [o] {
       Timer timer;

@@ -48,9 +48,44 @@ PosedCamera LookAt(const Camera& intrinsics, const Eigen::Vector3d& eye,
                              -(cam_from_world * eye))};
 }
 
+const char* TrainingMotionName(TrainingMotion motion) {
+  switch (motion) {
+    case TrainingMotion::kArc:
+      return "arc";
+    case TrainingMotion::kSlowArc:
+      return "slow-arc";
+    case TrainingMotion::kPan:
+      return "pan";
+    case TrainingMotion::kStatic:
+      return "static-camera";
+  }
+  return "arc";
+}
+
+TrainingMotion TrainingMotionFromName(const std::string& name) {
+  for (const TrainingMotion m :
+       {TrainingMotion::kArc, TrainingMotion::kSlowArc, TrainingMotion::kPan,
+        TrainingMotion::kStatic}) {
+    if (name == TrainingMotionName(m)) return m;
+  }
+  throw Error("synth", "--trajectory", name,
+              "expected arc, slow-arc, pan or static-camera");
+}
+
 std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
                                             const Camera& intrinsics,
-                                            int frames, std::uint32_t seed) {
+                                            int frames, std::uint32_t seed,
+                                            TrainingMotion motion) {
+  // The slow arc sweeps an eighth of the arc: at the default 56 degrees,
+  // 7 degrees, about the parallax of a slow handheld step.
+  constexpr double kSlowArcShare = 1.0 / 8;
+  const Layout& l = scene.layout;
+  const auto eye_at = [&](double azimuth_degrees) {
+    const double a = azimuth_degrees * kDegrees;
+    return Eigen::Vector3d(scene.target.x() + l.training_radius * std::cos(a),
+                           scene.target.y() + l.training_radius * std::sin(a),
+                           l.training_height);
+  };
   std::vector<PosedCamera> cameras;
   cameras.reserve(frames);
   for (int t = 0; t < frames; ++t) {
@@ -58,17 +93,34 @@ std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
     // Each sway draws from its own generator seeded identically per frame,
     // so the path is a smooth function of s.
     std::mt19937 position_rng(seed * 31U + 7U), aim_rng(seed * 31U + 11U);
-    const Layout& l = scene.layout;
-    const double azimuth =
-        (kTrainingAzimuth + l.training_half_sweep_degrees * (2 * s - 1)) *
-        kDegrees;
-    Eigen::Vector3d eye(
-        scene.target.x() + l.training_radius * std::cos(azimuth),
-        scene.target.y() + l.training_radius * std::sin(azimuth),
-        l.training_height);
-    eye += Sway(s, 0.03, position_rng, 1);
-    const Eigen::Vector3d aim = scene.target + Sway(s, 0.06, aim_rng, 2);
-    cameras.push_back(LookAt(intrinsics, eye, aim));
+    const Eigen::Vector3d position_sway = Sway(s, 0.03, position_rng, 1);
+    const Eigen::Vector3d aim_sway = Sway(s, 0.06, aim_rng, 2);
+    const double sweep = l.training_half_sweep_degrees * (2 * s - 1);
+    switch (motion) {
+      case TrainingMotion::kArc:
+      case TrainingMotion::kSlowArc: {
+        const double share = motion == TrainingMotion::kArc ? 1 : kSlowArcShare;
+        cameras.push_back(LookAt(
+            intrinsics,
+            eye_at(kTrainingAzimuth + share * sweep) + share * position_sway,
+            scene.target + aim_sway));
+        break;
+      }
+      case TrainingMotion::kPan: {
+        // The eye stays; the aim turns about it through the arc's sweep.
+        const Eigen::Vector3d eye = eye_at(kTrainingAzimuth);
+        const Eigen::Vector3d ahead = scene.target + aim_sway - eye;
+        const Eigen::Vector3d turned =
+            Eigen::AngleAxisd(sweep * kDegrees, Eigen::Vector3d::UnitZ()) *
+            ahead;
+        cameras.push_back(LookAt(intrinsics, eye, eye + turned));
+        break;
+      }
+      case TrainingMotion::kStatic:
+        cameras.push_back(
+            LookAt(intrinsics, eye_at(kTrainingAzimuth), scene.target));
+        break;
+    }
   }
   return cameras;
 }

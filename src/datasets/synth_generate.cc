@@ -103,6 +103,8 @@ Json SynthSummary::ToJson() const {
            {"unseen_fraction", unseen_fraction}}}};
   // Only when set, so that default scenes keep their bytes.
   if (dynamic_scale != 1.0) j["dynamic_scale"] = dynamic_scale;
+  if (trajectory != TrainingMotion::kArc)
+    j["trajectory"] = TrainingMotionName(trajectory);
   if (varied) {
     j["varied"] = true;
     j["layout"] = layout;
@@ -123,6 +125,7 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
   summary.is_static = options.is_static;
   summary.dynamic_scale = options.dynamic_scale;
   summary.varied = options.varied;
+  summary.trajectory = options.trajectory;
   EnsureDirectory(out);
   // A rerun replaces everything, so a stale marker must not survive a kill.
   fs::remove(out / "synth.json");
@@ -149,8 +152,8 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
 
   ProgressBar progress("synth " + preset.name,
                        train_frames + 2 * preset.val_frames);
-  const std::vector<PosedCamera> train_cameras =
-      TrainingTrajectory(scene, intrinsics, train_frames, options.seed);
+  const std::vector<PosedCamera> train_cameras = TrainingTrajectory(
+      scene, intrinsics, train_frames, options.seed, options.trajectory);
   std::vector<TrainingView> views;
   double near = std::numeric_limits<double>::infinity(), far = 0;
   for (int t = 0; t < train_frames; ++t) {
@@ -213,14 +216,17 @@ bool EnsureSynthScene(const SynthOptions& o, const fs::path& out) {
   const int seed = GetJson<int>(j, "seed", json.string());
   const bool is_static = GetJsonOr<bool>(j, "static", false, json.string());
   const bool varied = GetJsonOr<bool>(j, "varied", false, json.string());
+  const std::string trajectory =
+      GetJsonOr<std::string>(j, "trajectory", "arc", json.string());
   if (preset != o.preset || seed != static_cast<int>(o.seed) ||
-      is_static != o.is_static || varied != o.varied) {
-    throw Error(json.string(), "preset/seed",
-                preset + " seed " + std::to_string(seed) +
-                    (varied ? " varied" : ""),
-                "an earlier run made another scene here; use another "
-                "--workspace or remove " +
-                    out.string());
+      is_static != o.is_static || varied != o.varied ||
+      trajectory != TrainingMotionName(o.trajectory)) {
+    throw Error(
+        json.string(), "preset/seed",
+        preset + " seed " + std::to_string(seed) + (varied ? " varied" : ""),
+        "an earlier run made another scene here; use another "
+        "--workspace or remove " +
+            out.string());
   }
   return false;
 }

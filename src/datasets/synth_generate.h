@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "src/datasets/synth_cameras.h"
+
 namespace pano4d::synth {
 
 // Sizes at 1x; the 2x folders hold half of it, and evaluation uses 2x.
@@ -29,6 +31,9 @@ struct SynthOptions {
   // Draw the cameras' layout, sizes, texture scale and a near object from
   // the seed (VariedLayout, synth_scene.h) instead of the built-in scene's.
   bool varied = false;
+  // How the training camera moves (synth_cameras.h): the arc, or a case
+  // SfM finds hard (slow arc, pan, static camera).
+  TrainingMotion trajectory = TrainingMotion::kArc;
 };
 
 // What was generated. Written to synth.json without the timings, so the
@@ -39,7 +44,8 @@ struct SynthSummary {
   bool is_static = false;
   double dynamic_scale = 1.0;
   bool varied = false;
-  nlohmann::json layout;  // Layout::ToJson of a varied scene
+  TrainingMotion trajectory = TrainingMotion::kArc;
+  nlohmann::json layout;           // Layout::ToJson of a varied scene
   std::int64_t val_pixels = 0;     // 2x validation pixels with a surface
   std::int64_t unseen_pixels = 0;  // of those, not covisible
   double unseen_fraction = 0.0;

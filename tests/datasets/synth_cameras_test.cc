@@ -1,6 +1,11 @@
 #include "src/datasets/synth_cameras.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <gtest/gtest.h>
+
+#include "src/core/error.h"
 
 namespace pano4d::synth {
 namespace {
@@ -41,6 +46,41 @@ TEST(SynthCamerasTest,
         std::acos(mid.head<2>().normalized().dot(v.head<2>().normalized()));
     EXPECT_GT(angle * 180 / M_PI, 60.0);
   }
+}
+
+// The camera's path length and the largest angle between two of its views.
+std::pair<double, double> PathAndTurn(const std::vector<PosedCamera>& c) {
+  double path = 0, turn = 0;
+  for (std::size_t t = 0; t < c.size(); ++t) {
+    if (t > 0) path += (c[t].Center() - c[t - 1].Center()).norm();
+    turn = std::max(turn, c[t].cam_from_world.rotation.angularDistance(
+                              c[0].cam_from_world.rotation));
+  }
+  return {path, turn * 180 / M_PI};
+}
+
+TEST(SynthCamerasTest, SlowArcPanAndStaticCameraMoveAsNamed) {
+  const Scene scene = BuildScene(0, false);
+  const auto [arc_path, arc_turn] =
+      PathAndTurn(TrainingTrajectory(scene, kCamera, 48, 0));
+  const auto [slow_path, slow_turn] = PathAndTurn(
+      TrainingTrajectory(scene, kCamera, 48, 0, TrainingMotion::kSlowArc));
+  EXPECT_NEAR(slow_path, arc_path / 8, arc_path / 16);
+  EXPECT_LT(slow_turn, arc_turn / 4);
+  // A pan: one centre, turning through the arc's sweep.
+  const std::vector<PosedCamera> pan =
+      TrainingTrajectory(scene, kCamera, 48, 0, TrainingMotion::kPan);
+  const auto [pan_path, pan_turn] = PathAndTurn(pan);
+  EXPECT_LT(pan_path, 1e-9);
+  EXPECT_NEAR(pan_turn, 2 * scene.layout.training_half_sweep_degrees, 3.0);
+  const auto [still_path, still_turn] = PathAndTurn(
+      TrainingTrajectory(scene, kCamera, 48, 0, TrainingMotion::kStatic));
+  EXPECT_LT(still_path, 1e-9);
+  EXPECT_LT(still_turn, 1e-6);
+  for (const TrainingMotion m : {TrainingMotion::kArc, TrainingMotion::kSlowArc,
+                                 TrainingMotion::kPan, TrainingMotion::kStatic})
+    EXPECT_EQ(TrainingMotionFromName(TrainingMotionName(m)), m);
+  EXPECT_THROW(TrainingMotionFromName("dolly"), Error);
 }
 
 TEST(SynthCamerasTest, VariedLayoutsMoveTheCamerasOffTheDefaultPlaces) {
@@ -104,9 +144,9 @@ TEST(SynthCamerasTest, TheNearObjectStandsBetweenItsCameraAndTheTarget) {
   // distance the layout drew.
   const Eigen::Vector2d to_target = (scene.target - eye).head<2>().normalized();
   const Eigen::Vector2d to_object = (at - eye).head<2>();
-  EXPECT_LT(std::abs(to_target.x() * to_object.y() -
-                     to_target.y() * to_object.x()),
-            1e-9);
+  EXPECT_LT(
+      std::abs(to_target.x() * to_object.y() - to_target.y() * to_object.x()),
+      1e-9);
   EXPECT_GT(to_object.dot(to_target), 0.0);
   EXPECT_NEAR(at.z(), near.half_size.z(), 1e-12);
   // The other parts are the same scene.
