@@ -85,20 +85,84 @@ std::vector<DatabaseImage> ReadDatabaseImages(
   return images;
 }
 
+namespace {
+
+// A blob of rows x cols values of T, checked against its size.
+template <typename T>
+const T* Blob(sqlite3_stmt* s, int column, int rows, int cols,
+              const std::filesystem::path& database, const std::string& what) {
+  const int bytes = sqlite3_column_bytes(s, column);
+  if (rows < 0 || cols < 0 ||
+      static_cast<std::int64_t>(bytes) !=
+          static_cast<std::int64_t>(rows) * cols * sizeof(T)) {
+    throw Error(database.string(), what, std::to_string(bytes) + " bytes",
+                "expected rows " + std::to_string(rows) + " x cols " +
+                    std::to_string(cols) + " x " + std::to_string(sizeof(T)));
+  }
+  return static_cast<const T*>(sqlite3_column_blob(s, column));
+}
+
+}  // namespace
+
+std::map<std::uint32_t, std::vector<Eigen::Vector2d>> ReadDatabaseKeypoints(
+    const std::filesystem::path& database) {
+  std::map<std::uint32_t, std::vector<Eigen::Vector2d>> keypoints;
+  Query(database, "SELECT image_id, rows, cols, data FROM keypoints",
+        "keypoints", [&](sqlite3_stmt* s) {
+          const int rows = sqlite3_column_int(s, 1);
+          const int cols = sqlite3_column_int(s, 2);
+          const float* data =
+              Blob<float>(s, 3, rows, cols, database, "keypoints");
+          if (rows > 0 && cols < 2) {
+            throw Error(database.string(), "keypoints cols",
+                        std::to_string(cols), "expected at least x and y");
+          }
+          auto& points =
+              keypoints[static_cast<std::uint32_t>(sqlite3_column_int64(s, 0))];
+          for (int r = 0; r < rows; ++r)
+            points.emplace_back(data[r * cols], data[r * cols + 1]);
+        });
+  return keypoints;
+}
+
+std::vector<std::vector<std::array<std::uint32_t, 2>>>
+ReadDatabaseInlierMatches(const std::filesystem::path& database) {
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> matches;
+  Query(database,
+        "SELECT rows, cols, data FROM two_view_geometries ORDER BY pair_id",
+        "two_view_geometries", [&](sqlite3_stmt* s) {
+          const int rows = sqlite3_column_int(s, 0);
+          const int cols = sqlite3_column_int(s, 1);
+          auto& pair = matches.emplace_back();
+          if (rows == 0) return;
+          if (cols != 2) {
+            throw Error(database.string(), "two_view_geometries cols",
+                        std::to_string(cols), "expected 2");
+          }
+          const std::uint32_t* data = Blob<std::uint32_t>(
+              s, 2, rows, cols, database, "two_view_geometries");
+          for (int r = 0; r < rows; ++r)
+            pair.push_back({data[2 * r], data[2 * r + 1]});
+        });
+  return matches;
+}
+
 std::vector<DatabasePair> ReadDatabasePairs(
     const std::filesystem::path& database) {
   std::vector<DatabasePair> pairs;
-  Query(database, "SELECT pair_id, rows, config FROM two_view_geometries",
-        "two_view_geometries", [&](sqlite3_stmt* s) {
-          const std::int64_t pair_id = sqlite3_column_int64(s, 0);
-          DatabasePair p;
-          p.image_id2 = static_cast<std::uint32_t>(pair_id % kMaxImages);
-          p.image_id1 =
-              static_cast<std::uint32_t>((pair_id - p.image_id2) / kMaxImages);
-          p.inliers = sqlite3_column_int(s, 1);
-          p.config = sqlite3_column_int(s, 2);
-          pairs.push_back(p);
-        });
+  Query(
+      database,
+      "SELECT pair_id, rows, config FROM two_view_geometries ORDER BY pair_id",
+      "two_view_geometries", [&](sqlite3_stmt* s) {
+        const std::int64_t pair_id = sqlite3_column_int64(s, 0);
+        DatabasePair p;
+        p.image_id2 = static_cast<std::uint32_t>(pair_id % kMaxImages);
+        p.image_id1 =
+            static_cast<std::uint32_t>((pair_id - p.image_id2) / kMaxImages);
+        p.inliers = sqlite3_column_int(s, 1);
+        p.config = sqlite3_column_int(s, 2);
+        pairs.push_back(p);
+      });
   return pairs;
 }
 

@@ -1,9 +1,13 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 namespace pano4d {
 
@@ -48,5 +52,15 @@ std::vector<DatabaseImage> ReadDatabaseImages(
 // ReadDatabaseImages.
 std::vector<DatabasePair> ReadDatabasePairs(
     const std::filesystem::path& database);
+
+// Keypoint positions by image id (pixels, COLMAP's convention: the first
+// pixel's centre at 0.5), and each verified pair's inlier matches as
+// indices into the two images' keypoints, in the order of
+// ReadDatabasePairs. Throws as ReadDatabaseImages, and for a blob whose
+// size disagrees with its rows and columns.
+std::map<std::uint32_t, std::vector<Eigen::Vector2d>> ReadDatabaseKeypoints(
+    const std::filesystem::path& database);
+std::vector<std::vector<std::array<std::uint32_t, 2>>>
+ReadDatabaseInlierMatches(const std::filesystem::path& database);
 
 }  // namespace pano4d

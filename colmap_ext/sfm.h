@@ -65,6 +65,9 @@ struct SfmReport {
   std::filesystem::path model;           // the model later stages use
   std::filesystem::path images;          // the images that model refers to
   double mean_dynamic_fraction = 0.0;
+  // The frames match by homographies that rotations explain: the model is
+  // the rotation-only one (a pan: one centre, no points).
+  bool rotation_only = false;
   // The share of frames posed and, for those left out, why.
   SfmDiagnosis diagnosis;
   std::vector<SfmStepReport> steps;
@@ -72,7 +75,10 @@ struct SfmReport {
 
 // Runs the steps that are not complete yet: frames, dynamic masks, colmap
 // feature_extractor, matcher, mapper (the largest model becomes
-// WS/sparse/0), image_undistorter when the camera model has distortion.
+// WS/sparse/0; instead, when nearly every verified pair fits a homography
+// and rotations alone explain the matches, the rotation-only model of
+// src/geometry/rotation_only.h), image_undistorter
+// when the camera model has distortion.
 // Writes WS/pano4d/sfm.json (with posed_fraction and the diagnosis of the
 // unposed frames) and WS/pano4d/logs/timings.json. Throws
 // pano4d::Error naming the failed step, its log and the likely remedy.

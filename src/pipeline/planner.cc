@@ -30,6 +30,8 @@ StageDecision Sfm(const PlanFacts& f) {
       why += "; posed " + std::to_string(*f.sfm_posed) + " of " +
              std::to_string(*f.sfm_frames) + " (" +
              Percent(*f.sfm_posed / std::max(1.0, 1.0 * *f.sfm_frames)) + ")";
+      if (f.rotation_only)
+        why += " with the rotation-only camera model (the camera only turns)";
     }
     return {"sfm", true, false, why};
   }
@@ -191,6 +193,7 @@ nlohmann::json Plan::ToJson() const {
                               std::max(1.0, 1.0 * *facts.sfm_frames))
              : nlohmann::json()},
         {"min_posed", facts.min_posed},
+        {"camera_motion", facts.rotation_only ? "rotation-only" : "general"},
         {"eval_requested", facts.eval_requested},
         {"no_expansion", facts.no_expansion},
         {"no_motion", facts.no_motion}}},

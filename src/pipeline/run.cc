@@ -273,6 +273,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   };
 
   std::optional<SfmDiagnosis> posed;
+  bool rotation_only = false;
   if (plan.Runs("sfm")) {
     stage("sfm", [&] {
       SfmStageOptions s;
@@ -283,6 +284,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
       posed = r.report.diagnosis;
+      rotation_only = r.report.rotation_only;
       std::string ran;
       for (const SfmStepReport& step : r.report.steps)
         if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
@@ -296,6 +298,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   if (posed && !facts.poses_given) {
     facts.sfm_frames = posed->frames;
     facts.sfm_posed = posed->posed;
+    facts.rotation_only = rotation_only;
     plan = MakePlan(facts);
     WritePlan(ws, o, plan, summary.stages);
     if (posed->PosedFraction() < o.min_posed) {
@@ -313,6 +316,19 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
                        posed->Remedy().c_str(),
                        std::floor(100 * posed->PosedFraction()) / 100,
                        ws.sfm_json().c_str()));
+    }
+    if (rotation_only) {
+      summary.stages["sfm"]["status"] = "rotation-only camera";
+      WritePlan(ws, o, plan, summary.stages);
+      throw Error(
+          "pano4d run", "sfm", "rotation-only camera",
+          "the camera only turns: sfm posed the frames with the rotation-only "
+          "model (" +
+              (ws.sparse() / "0").string() +
+              "), which has no sparse points; plane-sweep stereo has no "
+              "baseline and depth alignment needs points, so depth and fit "
+              "cannot run on it yet (a video whose camera also moves "
+              "sideways can)");
     }
   }
   // Reused while its stamp records the same inputs; when it runs, the fit

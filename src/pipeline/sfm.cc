@@ -69,6 +69,10 @@ std::string SfmStageSummary::FullReport() const {
       "reprojection error %.3f px, %d model(s)\n",
       r.registered, r.frames, 100.0 * r.diagnosis.PosedFraction(), r.points3D,
       r.mean_reprojection_error, r.models);
+  if (r.rotation_only) {
+    s += "  camera: the rotation-only model (the frames match by "
+         "homographies that rotations explain: one centre, no points)\n";
+  }
   if (!r.diagnosis.AllPosed()) {
     s += "  not posed: " + r.diagnosis.Cause() +
          "\n  to pose more: " + r.diagnosis.Remedy() + "\n";

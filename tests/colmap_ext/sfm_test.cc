@@ -2,8 +2,11 @@
 // scene (label colmap; says COLMAP MISSING and skips without it).
 #include "colmap_ext/sfm.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -14,6 +17,7 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
+#include "src/core/json.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/synth_generate.h"
 #include "tests/support/test_files.h"
@@ -211,6 +215,56 @@ TEST(SfmDynamicTest, MasksDoNotWorsenTheTrajectoryWithLargeMovingObjects) {
               ate[0], ate[1]);
   // 5% for run-to-run variation of COLMAP's multithreaded mapper.
   EXPECT_LE(ate[0], 1.05 * ate[1]);
+}
+
+// A pan (synth --trajectory pan: one centre, turning through 56 degrees):
+// COLMAP's mapper cannot start, the rotation-only model poses every frame,
+// and its rotations match the ground truth's to 1 degree (issue 36).
+TEST(SfmPanTest, APanGetsTheRotationOnlyModelWithinOneDegree) {
+  if (!FindOnPath("colmap")) {
+    GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH";
+  }
+  testing::TempDir dir;
+  synth::GenerateSynthScene(
+      {.preset = "small", .seed = 0, .trajectory = synth::TrainingMotion::kPan},
+      dir / "scene");
+  const Dataset dataset = LoadDataset(dir / "scene", 1);
+  EnsureDirectory(dir / "train");
+  for (const DatasetFrame& frame : dataset.train)
+    fs::copy_file(frame.rgb, dir / "train" / (frame.id + ".png"));
+  SfmOptions options;
+  options.images = dir / "train";
+  options.workspace = dir / "ws";
+  options.matcher = "sequential";
+  const SfmReport report = RunSfm(options);
+  EXPECT_TRUE(report.rotation_only);
+  EXPECT_EQ(report.registered, report.frames);
+  const ColmapModel model = ReadModel(report.model);
+  const DatasetFrame& first = dataset.train.front();
+  const ColmapImage* first_image = model.FindImageByName(first.id + ".png");
+  ASSERT_NE(first_image, nullptr);
+  const Eigen::Quaterniond est0 = first_image->CamFromWorld().rotation;
+  const Eigen::Quaterniond gt0 = first.camera.cam_from_world.rotation;
+  double worst = 0;
+  for (const DatasetFrame& frame : dataset.train) {
+    const ColmapImage* image = model.FindImageByName(frame.id + ".png");
+    ASSERT_NE(image, nullptr) << frame.id;
+    const Eigen::Quaterniond est =
+        image->CamFromWorld().rotation * est0.conjugate();
+    const Eigen::Quaterniond gt =
+        frame.camera.cam_from_world.rotation * gt0.conjugate();
+    worst = std::max(worst, est.angularDistance(gt) * 180 / M_PI);
+  }
+  const double focal = model.cameras.front().params[0];
+  const double true_focal = first.camera.camera.params[0];
+  std::printf(
+      "pan: %d of %d frames, focal %.2f (truth %.2f), worst relative "
+      "rotation error %.3f deg\n",
+      report.registered, report.frames, focal, true_focal, worst);
+  EXPECT_LT(worst, 1.0);
+  EXPECT_NEAR(focal, true_focal, 0.02 * true_focal);
+  const nlohmann::json sfm = ReadJson(dir / "ws" / "pano4d" / "sfm.json");
+  EXPECT_EQ(sfm["camera_motion"], "rotation-only");
 }
 
 }  // namespace
