@@ -106,5 +106,44 @@ TEST_F(RunVideoTest, TooFewFramesPosedStopsTheRunNamingShareAndCause) {
             kTexturedFrames);
 }
 
+// A pan: sfm poses it with the rotation-only model, the plan says so, and
+// the run stops there with the reason (no points, no baseline).
+TEST_F(RunVideoTest, APanIsPosedRotationOnlyAndTheRunSaysWhyItStops) {
+  const fs::path log = dir_->path() / "pan_synth.log";
+  ASSERT_EQ(RunPano4d("synth --preset small --seed 0 --trajectory pan --out '" +
+                          (dir_->path() / "pan").string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const Dataset scene = LoadDataset(dir_->path() / "pan", 1);
+  const cv::Mat first = ReadImage(scene.train[0].rgb).ToBgr8();
+  const fs::path video = dir_->path() / "pan.avi";
+  {
+    cv::VideoWriter writer(video.string(),
+                           cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0,
+                           first.size());
+    ASSERT_TRUE(writer.isOpened());
+    for (std::size_t i = 0; i < scene.train.size(); i += 2)
+      writer.write(ReadImage(scene.train[i].rgb).ToBgr8());
+  }
+  const fs::path ws = dir_->path() / "ws_pan";
+  const fs::path run_log = dir_->path() / "pan_run.log";
+  ASSERT_NE(RunPano4d("run --video '" + video.string() + "' --workspace '" +
+                          ws.string() + "' --iterations 20",
+                      run_log),
+            0)
+      << Slurp(run_log);
+  const std::string out = Slurp(run_log);
+  EXPECT_NE(out.find("rotation-only"), std::string::npos) << out;
+  const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
+  EXPECT_EQ(plan["facts"]["camera_motion"], "rotation-only");
+  EXPECT_EQ(plan["facts"]["sfm_posed"], plan["facts"]["sfm_frames"]);
+  EXPECT_NE(Stage(plan, "sfm")["why"].get<std::string>().find(
+                "rotation-only camera model"),
+            std::string::npos);
+  EXPECT_EQ(plan["results"]["sfm"]["status"], "rotation-only camera");
+  EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+}
+
 }  // namespace
 }  // namespace pano4d
