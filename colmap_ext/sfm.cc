@@ -386,6 +386,20 @@ double RotationOnlyPairShare(const fs::path& database) {
   return verified > 0 ? static_cast<double>(rotation_only) / verified : 0.0;
 }
 
+// Rotation-only frames closer than this to each other (degrees) are one
+// still camera: a tripod's, whose frames differ by noise.
+constexpr double kStillDegrees = 0.1;
+
+bool AllRotationsAgree(const ColmapModel& model) {
+  const Eigen::Quaterniond first = model.images.front().CamFromWorld().rotation;
+  for (const ColmapImage& image : model.images) {
+    if (image.CamFromWorld().rotation.angularDistance(first) * 180 / M_PI >
+        kStillDegrees)
+      return false;
+  }
+  return true;
+}
+
 // A model whose cameras share one centre and that has no points: the
 // rotation-only model (COLMAP's mapper never writes one).
 bool IsRotationOnly(const ColmapModel& model) {
@@ -397,6 +411,12 @@ bool IsRotationOnly(const ColmapModel& model) {
 }
 
 }  // namespace
+
+std::string SfmReport::CameraMotion() const {
+  return static_camera   ? "static camera"
+         : rotation_only ? "rotation-only"
+                         : "general";
+}
 
 nlohmann::json SfmOptions::ToJson() const {
   return {{"video", video.string()},
@@ -715,6 +735,7 @@ SfmReport RunSfm(const SfmOptions& o) {
 
   const ColmapModel model = ReadModel(report.model);
   report.rotation_only = IsRotationOnly(model);
+  report.static_camera = report.rotation_only && AllRotationsAgree(model);
   report.registered = static_cast<int>(model.images.size());
   report.points3D = static_cast<int>(model.points3D.size());
   double error_sum = 0;
@@ -732,7 +753,7 @@ SfmReport RunSfm(const SfmOptions& o) {
       {"frames", report.frames},
       {"registered", report.registered},
       {"posed_fraction", report.diagnosis.PosedFraction()},
-      {"camera_motion", report.rotation_only ? "rotation-only" : "general"},
+      {"camera_motion", report.CameraMotion()},
       {"diagnosis", report.diagnosis.ToJson()},
       {"points3D", report.points3D},
       {"mean_reprojection_error_px", report.mean_reprojection_error},

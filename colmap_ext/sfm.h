@@ -68,6 +68,10 @@ struct SfmReport {
   // The frames match by homographies that rotations explain: the model is
   // the rotation-only one (a pan: one centre, no points).
   bool rotation_only = false;
+  // A rotation-only model whose rotations all agree: a camera on a tripod.
+  bool static_camera = false;
+  // "general", "rotation-only" or "static camera", as sfm.json says.
+  std::string CameraMotion() const;
   // The share of frames posed and, for those left out, why.
   SfmDiagnosis diagnosis;
   std::vector<SfmStepReport> steps;

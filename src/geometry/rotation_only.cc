@@ -132,6 +132,40 @@ RotationOnlyEstimate EstimateRotationOnly(
                                  options.min_inliers));
   }
 
+  // A still camera: every homography moves the image corners by less than
+  // kStillPixels. Its focal length is unobservable; COLMAP's prior for an
+  // unknown focal length stands in.
+  constexpr double kStillPixels = 1.0, kPriorFocalPerSide = 1.2;
+  double largest_move = 0;
+  for (const Pair& p : pairs) {
+    for (const Eigen::Vector2d corner :
+         {Eigen::Vector2d(0, 0), Eigen::Vector2d(width, 0),
+          Eigen::Vector2d(0, height), Eigen::Vector2d(width, height)}) {
+      const Eigen::Vector2d moved = (p.h * corner.homogeneous()).hnormalized();
+      largest_move = std::max(largest_move, (moved - corner).norm());
+    }
+  }
+  if (largest_move < kStillPixels) {
+    RotationOnlyEstimate still;
+    still.width = width;
+    still.height = height;
+    still.focal = kPriorFocalPerSide * std::max(width, height);
+    still.cam_from_world.assign(frames, std::nullopt);
+    double sum = 0;
+    std::int64_t count = 0;
+    for (const Pair& p : pairs) {
+      still.cam_from_world[p.matches->i] = Eigen::Matrix3d::Identity();
+      still.cam_from_world[p.matches->j] = Eigen::Matrix3d::Identity();
+      ++still.pairs;
+      for (const int idx : p.inliers) {
+        sum += (p.matches->xi[idx] - p.matches->xj[idx]).squaredNorm();
+        ++count;
+      }
+    }
+    still.rms_pixels = count > 0 ? std::sqrt(sum / count) : 0.0;
+    return still;
+  }
+
   // 2. The focal length whose K makes the homographies most like
   // rotations: a log-spaced search, then a golden-section refinement.
   const double side = std::max(width, height);

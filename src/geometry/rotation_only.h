@@ -40,6 +40,9 @@ struct RotationOnlyEstimate {
   int Posed() const;
 };
 
+// A camera that stands still (every homography moves the image corners by
+// less than a pixel) gets identity rotations and COLMAP's prior focal
+// length, 1.2 x the larger side (the focal length is unobservable then).
 // Throws pano4d::Error when no pair has min_inliers homography inliers, or
 // the focal length has no minimum in [0.25, 4] x the larger image side.
 RotationOnlyEstimate EstimateRotationOnly(

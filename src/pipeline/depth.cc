@@ -206,7 +206,8 @@ std::vector<DepthSample> SfmSamples(const ColmapModel& model,
 
 // External depth maps (one per frame named <name>.npy, .png, .tiff or
 // .exr, any resolution) brought onto the SfM points' scale with a robust
-// scale and shift per frame.
+// scale and shift per frame; taken as they are when the model has no
+// points (a rotation-only or static camera).
 void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
                         const ColmapModel& model, WorkspaceFrames* frames) {
   nlohmann::json report = nlohmann::json::array();
@@ -224,6 +225,19 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
       // Nearest: interpolating across depth edges invents surfaces.
       cv::resize(depth, resized, cv::Size(w, h), 0, 0, cv::INTER_NEAREST);
       depth = resized;
+    }
+    if (model.points3D.empty()) {
+      // A rotation-only or static camera's model (one centre) has no
+      // points to align to: the maps are the user's metric depth.
+      f.depth = ws.depth_map(f.name);
+      WriteDepthMap(f.depth, depth);
+      report.push_back({{"frame", f.name},
+                        {"scale", 1.0},
+                        {"shift", 0.0},
+                        {"samples", 0},
+                        {"as_given", "the model has no points"}});
+      bar.Add();
+      continue;
     }
     try {
       const DepthAlignment a = AlignDepth(depth, SfmSamples(model, f));

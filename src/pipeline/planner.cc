@@ -30,8 +30,10 @@ StageDecision Sfm(const PlanFacts& f) {
       why += "; posed " + std::to_string(*f.sfm_posed) + " of " +
              std::to_string(*f.sfm_frames) + " (" +
              Percent(*f.sfm_posed / std::max(1.0, 1.0 * *f.sfm_frames)) + ")";
-      if (f.rotation_only)
+      if (f.camera_motion == "rotation-only")
         why += " with the rotation-only camera model (the camera only turns)";
+      if (f.camera_motion == "static camera")
+        why += "; static camera (every frame's pose the same)";
     }
     return {"sfm", true, false, why};
   }
@@ -50,6 +52,12 @@ StageDecision Sfm(const PlanFacts& f) {
 }
 
 StageDecision Depth(const PlanFacts& f) {
+  if (f.depth_source == kDepthFromExternal && f.camera_motion != "general") {
+    return {"depth", true, false,
+            "depth from --depth-dir " + f.depth_dir + ": used as given (" +
+                f.camera_motion +
+                ": one camera centre, no sparse points to align to)"};
+  }
   if (f.depth_source == kDepthFromExternal) {
     return {"depth", true, false,
             "depth from --depth-dir " + f.depth_dir +
@@ -193,7 +201,7 @@ nlohmann::json Plan::ToJson() const {
                               std::max(1.0, 1.0 * *facts.sfm_frames))
              : nlohmann::json()},
         {"min_posed", facts.min_posed},
-        {"camera_motion", facts.rotation_only ? "rotation-only" : "general"},
+        {"camera_motion", facts.camera_motion},
         {"eval_requested", facts.eval_requested},
         {"no_expansion", facts.no_expansion},
         {"no_motion", facts.no_motion}}},

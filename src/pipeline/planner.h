@@ -48,7 +48,9 @@ struct PlanFacts {
   // After sfm: the frames COLMAP was given and those it posed (empty
   // before, and when the poses are given).
   std::optional<int> sfm_frames, sfm_posed;
-  bool rotation_only = false;  // sfm's camera model: one centre, no points
+  // sfm's camera model: "general", or one centre and no points:
+  // "rotation-only" (a pan) or "static camera" (SfmReport::CameraMotion).
+  std::string camera_motion = "general";
   // `pano4d run` stops after sfm below this share of frames posed.
   double min_posed = kDefaultMinPosed;
   // The user's word, which overrides the facts.

@@ -273,7 +273,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   };
 
   std::optional<SfmDiagnosis> posed;
-  bool rotation_only = false;
+  std::string camera_motion = "general";
   if (plan.Runs("sfm")) {
     stage("sfm", [&] {
       SfmStageOptions s;
@@ -284,7 +284,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
       const SfmStageSummary r = RunSfmStage(s);
       if (progress) *progress << r.FullReport();
       posed = r.report.diagnosis;
-      rotation_only = r.report.rotation_only;
+      camera_motion = r.report.CameraMotion();
       std::string ran;
       for (const SfmStepReport& step : r.report.steps)
         if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
@@ -298,7 +298,7 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
   if (posed && !facts.poses_given) {
     facts.sfm_frames = posed->frames;
     facts.sfm_posed = posed->posed;
-    facts.rotation_only = rotation_only;
+    facts.camera_motion = camera_motion;
     plan = MakePlan(facts);
     WritePlan(ws, o, plan, summary.stages);
     if (posed->PosedFraction() < o.min_posed) {
@@ -317,18 +317,21 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
                        std::floor(100 * posed->PosedFraction()) / 100,
                        ws.sfm_json().c_str()));
     }
-    if (rotation_only) {
-      summary.stages["sfm"]["status"] = "rotation-only camera";
+    // One centre: no stereo baseline and no points to align depth to, so
+    // the depth must be the user's, taken as it is.
+    if (camera_motion != "general" && o.depth.depth_dir.empty()) {
+      summary.stages["sfm"]["status"] = camera_motion;
       WritePlan(ws, o, plan, summary.stages);
       throw Error(
-          "pano4d run", "sfm", "rotation-only camera",
-          "the camera only turns: sfm posed the frames with the rotation-only "
-          "model (" +
+          "pano4d run", "sfm", camera_motion,
+          (camera_motion == "static camera"
+               ? std::string("the camera stands still")
+               : std::string("the camera only turns")) +
+              ": sfm posed the frames with one centre (" +
               (ws.sparse() / "0").string() +
-              "), which has no sparse points; plane-sweep stereo has no "
-              "baseline and depth alignment needs points, so depth and fit "
-              "cannot run on it yet (a video whose camera also moves "
-              "sideways can)");
+              ", no sparse points), so plane-sweep stereo has no baseline; "
+              "give depth maps with --depth-dir (one per frame, metric: "
+              "they are used as they are)");
     }
   }
   // Reused while its stamp records the same inputs; when it runs, the fit

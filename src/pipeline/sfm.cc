@@ -69,7 +69,10 @@ std::string SfmStageSummary::FullReport() const {
       "reprojection error %.3f px, %d model(s)\n",
       r.registered, r.frames, 100.0 * r.diagnosis.PosedFraction(), r.points3D,
       r.mean_reprojection_error, r.models);
-  if (r.rotation_only) {
+  if (r.static_camera) {
+    s += "  camera: static (one pose for every frame: the frames match by "
+         "the identity; no points)\n";
+  } else if (r.rotation_only) {
     s += "  camera: the rotation-only model (the frames match by "
          "homographies that rotations explain: one centre, no points)\n";
   }

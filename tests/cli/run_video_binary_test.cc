@@ -141,8 +141,31 @@ TEST_F(RunVideoTest, APanIsPosedRotationOnlyAndTheRunSaysWhyItStops) {
   EXPECT_NE(Stage(plan, "sfm")["why"].get<std::string>().find(
                 "rotation-only camera model"),
             std::string::npos);
-  EXPECT_EQ(plan["results"]["sfm"]["status"], "rotation-only camera");
+  EXPECT_EQ(plan["results"]["sfm"]["status"], "rotation-only");
   EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+
+  // With depth maps given (the scene's own, named as the video's frames)
+  // the run goes on: the maps as they are, and a short fit.
+  const fs::path depth_dir = dir_->path() / "pan_depth";
+  EnsureDirectory(depth_dir);
+  for (std::size_t i = 0; i < scene.train.size(); i += 2) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%06zu.npy", i / 2);
+    fs::copy_file(
+        dir_->path() / "pan" / "depth" / "1x" / (scene.train[i].id + ".npy"),
+        depth_dir / name);
+  }
+  const fs::path depth_log = dir_->path() / "pan_depth_run.log";
+  ASSERT_EQ(RunPano4d("run --video '" + video.string() + "' --workspace '" +
+                          ws.string() + "' --depth-dir '" + depth_dir.string() +
+                          "' --max-size 240 --iterations 20 --no-expansion",
+                      depth_log),
+            0)
+      << Slurp(depth_log);
+  const nlohmann::json done = ReadJson(ws / "pano4d/plan.json");
+  EXPECT_NE(Stage(done, "depth")["why"].get<std::string>().find("as given"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(ws / "pano4d/fit.json"));
 }
 
 }  // namespace

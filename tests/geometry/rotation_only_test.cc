@@ -113,6 +113,18 @@ TEST(RotationOnlyTest, AFrameNoPairReachesIsLeftUnposed) {
   EXPECT_FALSE(e.cam_from_world[9].has_value());
 }
 
+TEST(RotationOnlyTest, AStillCameraGetsOnePoseAndThePriorFocalLength) {
+  Scene s = MakePan(6, 2, 0.2, 0.0);
+  for (FrameMatches& m : s.pairs) m.xj = m.xi;  // nothing moves
+  const RotationOnlyEstimate e =
+      EstimateRotationOnly(6, kWidth, kHeight, s.pairs);
+  ASSERT_EQ(e.Posed(), 6);
+  for (const auto& r : e.cam_from_world)
+    EXPECT_LT(Degrees(*r, Eigen::Matrix3d::Identity()), 1e-12);
+  EXPECT_DOUBLE_EQ(e.focal, 1.2 * kWidth);
+  EXPECT_LT(e.rms_pixels, 1e-9);
+}
+
 TEST(RotationOnlyTest, NoUsablePairOrUnequalMatchesAreErrors) {
   EXPECT_THROW(EstimateRotationOnly(3, kWidth, kHeight, {}), Error);
   FrameMatches bad{0, 1, {Eigen::Vector2d(1, 2)}, {}};
