@@ -362,6 +362,18 @@ void WriteRotationOnlyModel(const std::vector<DatabaseImage>& images,
   WriteModel(model, out, ColmapFormat::kBinary);
 }
 
+// COLMAP's mapper settings for casual video, where consecutive frames see
+// little parallax and moving objects take features: the inlier counts an
+// initial pair and a registered frame need are relaxed (COLMAP's defaults:
+// 100, 30 and 0.25), the triangulation angles kept. On lady-running at
+// --max-size 160 the defaults posed 15 of 65 frames, these 65 (docs/
+// experiments/2026-12-03-casual-video-posing.md).
+std::vector<std::string> MapperArgs() {
+  return {"--Mapper.init_min_num_inliers",      "50",
+          "--Mapper.abs_pose_min_num_inliers",  "15",
+          "--Mapper.abs_pose_min_inlier_ratio", "0.15"};
+}
+
 // Above this share of verified pairs that COLMAP explains by a homography
 // (PANORAMIC, PLANAR_OR_PANORAMIC) the rotation-only model is tried before
 // the mapper: on a pan the mapper either fails or, now and then, builds a
@@ -647,7 +659,7 @@ SfmReport RunSfm(const SfmOptions& o) {
         });
   } else {
     step(
-        "mapper", {{"frames", report.frames}},
+        "mapper", {{"frames", report.frames}, {"options", MapperArgs()}},
         [&] { return DetectModelFormat(sparse / "0").has_value(); },
         [&] {
           fs::remove_all(sparse);
@@ -691,10 +703,12 @@ SfmReport RunSfm(const SfmOptions& o) {
             }
           }
           try {
-            colmap.Run("mapper",
-                       {"--database_path", database.string(), "--image_path",
-                        images_dir.string(), "--output_path", sparse.string()},
-                       logs / "mapper.log");
+            std::vector<std::string> args = {
+                "--database_path",   database.string(), "--image_path",
+                images_dir.string(), "--output_path",   sparse.string()};
+            const std::vector<std::string> relaxed = MapperArgs();
+            args.insert(args.end(), relaxed.begin(), relaxed.end());
+            colmap.Run("mapper", args, logs / "mapper.log");
           } catch (const Error& e) {
             throw nothing_posed(e.problem());
           }
