@@ -94,7 +94,8 @@ const T* Blob(sqlite3_stmt* s, int column, int rows, int cols,
   const int bytes = sqlite3_column_bytes(s, column);
   if (rows < 0 || cols < 0 ||
       static_cast<std::int64_t>(bytes) !=
-          static_cast<std::int64_t>(rows) * cols * sizeof(T)) {
+          static_cast<std::int64_t>(rows) * cols *
+              static_cast<std::int64_t>(sizeof(T))) {
     throw Error(database.string(), what, std::to_string(bytes) + " bytes",
                 "expected rows " + std::to_string(rows) + " x cols " +
                     std::to_string(cols) + " x " + std::to_string(sizeof(T)));
@@ -125,44 +126,35 @@ std::map<std::uint32_t, std::vector<Eigen::Vector2d>> ReadDatabaseKeypoints(
   return keypoints;
 }
 
-std::vector<std::vector<std::array<std::uint32_t, 2>>>
-ReadDatabaseInlierMatches(const std::filesystem::path& database) {
-  std::vector<std::vector<std::array<std::uint32_t, 2>>> matches;
-  Query(database,
-        "SELECT rows, cols, data FROM two_view_geometries ORDER BY pair_id",
-        "two_view_geometries", [&](sqlite3_stmt* s) {
-          const int rows = sqlite3_column_int(s, 0);
-          const int cols = sqlite3_column_int(s, 1);
-          auto& pair = matches.emplace_back();
-          if (rows == 0) return;
-          if (cols != 2) {
-            throw Error(database.string(), "two_view_geometries cols",
-                        std::to_string(cols), "expected 2");
-          }
-          const std::uint32_t* data = Blob<std::uint32_t>(
-              s, 2, rows, cols, database, "two_view_geometries");
-          for (int r = 0; r < rows; ++r)
-            pair.push_back({data[2 * r], data[2 * r + 1]});
-        });
-  return matches;
-}
-
 std::vector<DatabasePair> ReadDatabasePairs(
-    const std::filesystem::path& database) {
+    const std::filesystem::path& database, bool with_matches) {
   std::vector<DatabasePair> pairs;
-  Query(
-      database,
-      "SELECT pair_id, rows, config FROM two_view_geometries ORDER BY pair_id",
-      "two_view_geometries", [&](sqlite3_stmt* s) {
-        const std::int64_t pair_id = sqlite3_column_int64(s, 0);
-        DatabasePair p;
-        p.image_id2 = static_cast<std::uint32_t>(pair_id % kMaxImages);
-        p.image_id1 =
-            static_cast<std::uint32_t>((pair_id - p.image_id2) / kMaxImages);
-        p.inliers = sqlite3_column_int(s, 1);
-        p.config = sqlite3_column_int(s, 2);
-        pairs.push_back(p);
-      });
+  Query(database,
+        with_matches ? "SELECT pair_id, rows, config, cols, data FROM "
+                       "two_view_geometries ORDER BY pair_id"
+                     : "SELECT pair_id, rows, config FROM two_view_geometries "
+                       "ORDER BY pair_id",
+        "two_view_geometries", [&](sqlite3_stmt* s) {
+          const std::int64_t pair_id = sqlite3_column_int64(s, 0);
+          DatabasePair p;
+          p.image_id2 = static_cast<std::uint32_t>(pair_id % kMaxImages);
+          p.image_id1 =
+              static_cast<std::uint32_t>((pair_id - p.image_id2) / kMaxImages);
+          p.inliers = sqlite3_column_int(s, 1);
+          p.config = sqlite3_column_int(s, 2);
+          if (with_matches && p.inliers > 0) {
+            const int cols = sqlite3_column_int(s, 3);
+            if (cols != 2) {
+              throw Error(database.string(), "two_view_geometries cols",
+                          std::to_string(cols), "expected 2");
+            }
+            const std::uint32_t* data = Blob<std::uint32_t>(
+                s, 4, p.inliers, cols, database, "two_view_geometries");
+            for (int r = 0; r < p.inliers; ++r)
+              p.matches.push_back({data[2 * r], data[2 * r + 1]});
+          }
+          pairs.push_back(std::move(p));
+        });
   return pairs;
 }
 

@@ -38,6 +38,9 @@ struct DatabasePair {
   std::uint32_t image_id1 = 0, image_id2 = 0;
   int inliers = 0;  // verified matches (the table's rows)
   int config = 0;   // PairConfig
+  // The inlier matches as indices into the two images' keypoints; read
+  // only when asked (ReadDatabasePairs' with_matches).
+  std::vector<std::array<std::uint32_t, 2>> matches;
 };
 
 // The images table of a COLMAP database, opened read-only, by image id,
@@ -48,19 +51,17 @@ struct DatabasePair {
 std::vector<DatabaseImage> ReadDatabaseImages(
     const std::filesystem::path& database);
 
-// The two_view_geometries table (empty before a matcher ran). Throws as
-// ReadDatabaseImages.
+// The two_view_geometries table in pair id order (empty before a matcher
+// ran), with each pair's inlier matches when `with_matches`. Throws as
+// ReadDatabaseImages, and for a matches blob whose size disagrees with its
+// rows and columns.
 std::vector<DatabasePair> ReadDatabasePairs(
-    const std::filesystem::path& database);
+    const std::filesystem::path& database, bool with_matches = false);
 
 // Keypoint positions by image id (pixels, COLMAP's convention: the first
-// pixel's centre at 0.5), and each verified pair's inlier matches as
-// indices into the two images' keypoints, in the order of
-// ReadDatabasePairs. Throws as ReadDatabaseImages, and for a blob whose
-// size disagrees with its rows and columns.
+// pixel's centre at 0.5). Throws as ReadDatabaseImages, and for a blob
+// whose size disagrees with its rows and columns.
 std::map<std::uint32_t, std::vector<Eigen::Vector2d>> ReadDatabaseKeypoints(
     const std::filesystem::path& database);
-std::vector<std::vector<std::array<std::uint32_t, 2>>>
-ReadDatabaseInlierMatches(const std::filesystem::path& database);
 
 }  // namespace pano4d

@@ -12,6 +12,7 @@
 #include "colmap_ext/database.h"
 #include "colmap_ext/masks.h"
 #include "colmap_ext/model.h"
+#include "colmap_ext/rotation_only_model.h"
 #include "colmap_ext/sfm_diagnosis.h"
 #include "src/core/camera.h"
 #include "src/core/error.h"
@@ -25,7 +26,6 @@
 #include "src/core/video.h"
 #include "src/core/workspace.h"
 #include "src/geometry/motion_segmentation.h"
-#include "src/geometry/rotation_only.h"
 
 #include <cstdio>
 
@@ -294,74 +294,6 @@ int SelectLargestModel(const fs::path& sparse) {
   return static_cast<int>(largest->first);
 }
 
-// The rotation-only model of a camera that turns about a fixed centre: the
-// rotations and focal length of the verified pairs' matches
-// (src/geometry/rotation_only.h), for the database's images in id order.
-RotationOnlyEstimate EstimateRotationOnlyFromDatabase(
-    const fs::path& database, const std::vector<DatabaseImage>& images,
-    int width, int height) {
-  std::map<std::uint32_t, int> frame_of;
-  for (std::size_t k = 0; k < images.size(); ++k)
-    frame_of[images[k].image_id] = static_cast<int>(k);
-  const auto keypoints = ReadDatabaseKeypoints(database);
-  const std::vector<DatabasePair> pairs = ReadDatabasePairs(database);
-  const auto inliers = ReadDatabaseInlierMatches(database);
-  std::vector<FrameMatches> matches;
-  for (std::size_t k = 0; k < pairs.size() && k < inliers.size(); ++k) {
-    const auto i = frame_of.find(pairs[k].image_id1);
-    const auto j = frame_of.find(pairs[k].image_id2);
-    const auto ki = keypoints.find(pairs[k].image_id1);
-    const auto kj = keypoints.find(pairs[k].image_id2);
-    if (i == frame_of.end() || j == frame_of.end() || ki == keypoints.end() ||
-        kj == keypoints.end())
-      continue;
-    FrameMatches m{i->second, j->second, {}, {}};
-    for (const auto& [a, b] : inliers[k]) {
-      if (a >= ki->second.size() || b >= kj->second.size()) {
-        throw Error(database.string(), "two_view_geometries",
-                    std::to_string(a) + "," + std::to_string(b),
-                    "a match refers to a keypoint its image lacks");
-      }
-      m.xi.push_back(ki->second[a]);
-      m.xj.push_back(kj->second[b]);
-    }
-    matches.push_back(std::move(m));
-  }
-  return EstimateRotationOnly(static_cast<int>(images.size()), width, height,
-                              matches);
-}
-
-// The estimate as a COLMAP model in `out`: every centre at the origin, one
-// PINHOLE camera per database camera, no points (nothing can be
-// triangulated).
-void WriteRotationOnlyModel(const std::vector<DatabaseImage>& images,
-                            const RotationOnlyEstimate& e,
-                            const fs::path& out) {
-  ColmapModel model;
-  std::set<std::uint32_t> cameras;
-  const Camera pinhole{CameraModelId::kPinhole,
-                       e.width,
-                       e.height,
-                       {e.focal, e.focal, e.width / 2.0, e.height / 2.0}};
-  for (std::size_t k = 0; k < images.size(); ++k) {
-    if (!e.cam_from_world[k]) continue;
-    if (cameras.insert(images[k].camera_id).second)
-      model.cameras.push_back(FromCamera(images[k].camera_id, pinhole));
-    ColmapImage image;
-    image.image_id = images[k].image_id;
-    image.camera_id = images[k].camera_id;
-    image.name = images[k].name;
-    image.SetCamFromWorld(
-        Rigid3d(Eigen::Quaterniond(*e.cam_from_world[k]).normalized(),
-                Eigen::Vector3d::Zero()));
-    model.images.push_back(std::move(image));
-  }
-  model.BuildIndex();
-  fs::remove_all(out);
-  EnsureDirectory(out);
-  WriteModel(model, out, ColmapFormat::kBinary);
-}
-
 // COLMAP's mapper settings for casual video, where consecutive frames see
 // little parallax and moving objects take features: the inlier counts an
 // initial pair and a registered frame need are relaxed (COLMAP's defaults:
@@ -372,54 +304,6 @@ std::vector<std::string> MapperArgs() {
   return {"--Mapper.init_min_num_inliers",      "50",
           "--Mapper.abs_pose_min_num_inliers",  "15",
           "--Mapper.abs_pose_min_inlier_ratio", "0.15"};
-}
-
-// Above this share of verified pairs that COLMAP explains by a homography
-// (PANORAMIC, PLANAR_OR_PANORAMIC) the rotation-only model is tried before
-// the mapper: on a pan the mapper either fails or, now and then, builds a
-// model of a moving camera from noise (7 degrees off, measured).
-constexpr double kRotationOnlyPairShare = 0.9;
-// A camera that also moves leaves parallax the rotation-only model cannot
-// explain: it is kept only when its transfer error stays below this
-// (pixels; measured on the synthetic small scene at 480x360: 0.57 on a
-// pan, 1.22 on the 7-degree slow arc).
-constexpr double kRotationOnlyMaxRms = 0.8;
-
-// The share of verified pairs that are rotation-only.
-double RotationOnlyPairShare(const fs::path& database) {
-  int verified = 0, rotation_only = 0;
-  for (const DatabasePair& p : ReadDatabasePairs(database)) {
-    if (p.inliers < kMinPairInliers) continue;
-    ++verified;
-    rotation_only +=
-        p.config == static_cast<int>(PairConfig::kPanoramic) ||
-        p.config == static_cast<int>(PairConfig::kPlanarOrPanoramic);
-  }
-  return verified > 0 ? static_cast<double>(rotation_only) / verified : 0.0;
-}
-
-// Rotation-only frames closer than this to each other (degrees) are one
-// still camera: a tripod's, whose frames differ by noise.
-constexpr double kStillDegrees = 0.1;
-
-bool AllRotationsAgree(const ColmapModel& model) {
-  const Eigen::Quaterniond first = model.images.front().CamFromWorld().rotation;
-  for (const ColmapImage& image : model.images) {
-    if (image.CamFromWorld().rotation.angularDistance(first) * 180 / M_PI >
-        kStillDegrees)
-      return false;
-  }
-  return true;
-}
-
-// A model whose cameras share one centre and that has no points: the
-// rotation-only model (COLMAP's mapper never writes one).
-bool IsRotationOnly(const ColmapModel& model) {
-  if (!model.points3D.empty() || model.images.size() < 2) return false;
-  const Eigen::Vector3d first = model.images.front().Center();
-  for (const ColmapImage& image : model.images)
-    if ((image.Center() - first).norm() > 1e-9) return false;
-  return true;
 }
 
 }  // namespace
@@ -675,33 +559,12 @@ SfmReport RunSfm(const SfmOptions& o) {
                 "Cause: " + d.Cause() + ". To try: " + d.Remedy() + " (" +
                     colmap_said + ")");
           };
-          // A camera that only turns: the rotation-only model instead.
-          const double share = RotationOnlyPairShare(database);
-          if (share > kRotationOnlyPairShare) {
-            const std::vector<DatabaseImage> images =
-                ReadDatabaseImages(database);
-            const Image first = ReadImage(frames.front());
-            try {
-              const RotationOnlyEstimate e = EstimateRotationOnlyFromDatabase(
-                  database, images, first.width(), first.height());
-              PANO4D_LOG(kInfo)
-                  << "sfm: " << 100 * share
-                  << "% of the verified pairs fit a homography; rotation-only "
-                     "model: "
-                  << e.Posed() << " of " << images.size() << " frames, focal "
-                  << e.focal << " px, transfer rms " << e.rms_pixels << " px"
-                  << (e.rms_pixels < kRotationOnlyMaxRms
-                          ? " (kept)"
-                          : " (the camera moves too: the mapper instead)");
-              if (e.rms_pixels < kRotationOnlyMaxRms && e.Posed() >= 2) {
-                WriteRotationOnlyModel(images, e, sparse / "0");
-                return;
-              }
-            } catch (const Error& e) {
-              PANO4D_LOG(kInfo) << "sfm: no rotation-only model (" << e.what()
-                                << "); the mapper instead";
-            }
-          }
+          // A camera that only turns, or stands still: the rotation-only
+          // model instead.
+          const Image first = ReadImage(frames.front());
+          if (TryRotationOnlyModel(database, first.width(), first.height(),
+                                   sparse / "0"))
+            return;
           try {
             std::vector<std::string> args = {
                 "--database_path",   database.string(), "--image_path",
@@ -749,7 +612,7 @@ SfmReport RunSfm(const SfmOptions& o) {
 
   const ColmapModel model = ReadModel(report.model);
   report.rotation_only = IsRotationOnly(model);
-  report.static_camera = report.rotation_only && AllRotationsAgree(model);
+  report.static_camera = IsStaticCamera(model);
   report.registered = static_cast<int>(model.images.size());
   report.points3D = static_cast<int>(model.points3D.size());
   double error_sum = 0;

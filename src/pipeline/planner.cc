@@ -26,10 +26,9 @@ StageDecision Sfm(const PlanFacts& f) {
         "extraction, matching, mapping, undistortion); the run stops if it "
         "poses fewer than " +
         Percent(f.min_posed) + " of them (--min-posed)";
-    if (f.sfm_frames && f.sfm_posed) {
+    if (const std::optional<double> posed = f.SfmPosedFraction()) {
       why += "; posed " + std::to_string(*f.sfm_posed) + " of " +
-             std::to_string(*f.sfm_frames) + " (" +
-             Percent(*f.sfm_posed / std::max(1.0, 1.0 * *f.sfm_frames)) + ")";
+             std::to_string(*f.sfm_frames) + " (" + Percent(*posed) + ")";
       if (f.camera_motion == "rotation-only")
         why += " with the rotation-only camera model (the camera only turns)";
       if (f.camera_motion == "static camera")
@@ -161,6 +160,11 @@ const char* InputKindName(InputKind kind) {
   return "unknown";
 }
 
+std::optional<double> PlanFacts::SfmPosedFraction() const {
+  if (!sfm_frames || !sfm_posed) return std::nullopt;
+  return *sfm_posed / std::max(1.0, 1.0 * *sfm_frames);
+}
+
 const StageDecision& Plan::Get(const std::string& stage) const {
   for (const StageDecision& d : stages)
     if (d.stage == stage) return d;
@@ -195,11 +199,7 @@ nlohmann::json Plan::ToJson() const {
                                         : nlohmann::json()},
         {"sfm_posed",
          facts.sfm_posed ? nlohmann::json(*facts.sfm_posed) : nlohmann::json()},
-        {"sfm_posed_fraction",
-         facts.sfm_frames && facts.sfm_posed
-             ? nlohmann::json(*facts.sfm_posed /
-                              std::max(1.0, 1.0 * *facts.sfm_frames))
-             : nlohmann::json()},
+        {"sfm_posed_fraction", optional(facts.SfmPosedFraction())},
         {"min_posed", facts.min_posed},
         {"camera_motion", facts.camera_motion},
         {"eval_requested", facts.eval_requested},

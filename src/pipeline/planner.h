@@ -48,6 +48,8 @@ struct PlanFacts {
   // After sfm: the frames COLMAP was given and those it posed (empty
   // before, and when the poses are given).
   std::optional<int> sfm_frames, sfm_posed;
+  // sfm_posed / sfm_frames, empty before sfm.
+  std::optional<double> SfmPosedFraction() const;
   // sfm's camera model: "general", or one centre and no points:
   // "rotation-only" (a pan) or "static camera" (SfmReport::CameraMotion).
   std::string camera_motion = "general";

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/json.h"
+#include "tests/support/plan_json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -19,15 +20,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
+using testing::PlanStage;
 using testing::RunPano4d;
-
-const nlohmann::json& Stage(const nlohmann::json& plan,
-                            const std::string& name) {
-  for (const auto& s : plan["stages"])
-    if (s["stage"] == name) return s;
-  ADD_FAILURE() << "no stage " << name << " in " << plan.dump(2);
-  return plan;
-}
 
 class RunBinaryTest : public ::testing::Test {
  protected:
@@ -66,12 +60,12 @@ TEST_F(RunBinaryTest, PlansRunsAndResumesADataset) {
       << out;
 
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
-  EXPECT_FALSE(Stage(plan, "sfm")["run"].get<bool>());
-  EXPECT_FALSE(Stage(plan, "depth")["run"].get<bool>());
-  EXPECT_TRUE(Stage(plan, "motion")["run"].get<bool>());
-  EXPECT_FALSE(Stage(plan, "motion")["pending"].get<bool>());
-  EXPECT_TRUE(Stage(plan, "expansion")["run"].get<bool>());
-  EXPECT_TRUE(Stage(plan, "eval")["run"].get<bool>());
+  EXPECT_FALSE(PlanStage(plan, "sfm")["run"].get<bool>());
+  EXPECT_FALSE(PlanStage(plan, "depth")["run"].get<bool>());
+  EXPECT_TRUE(PlanStage(plan, "motion")["run"].get<bool>());
+  EXPECT_FALSE(PlanStage(plan, "motion")["pending"].get<bool>());
+  EXPECT_TRUE(PlanStage(plan, "expansion")["run"].get<bool>());
+  EXPECT_TRUE(PlanStage(plan, "eval")["run"].get<bool>());
   EXPECT_GT(plan["facts"]["dynamic_fraction"].get<double>(), 0.0);
   EXPECT_GT(plan["facts"]["unseen_fraction"].get<double>(), 0.0);
   EXPECT_EQ(plan["results"]["fit"]["status"], "done");
@@ -193,14 +187,14 @@ TEST_F(RunBinaryTest, AStaticSceneGetsNoMotionAndNoEvalUnlessAsked) {
       0)
       << Slurp(log);
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
-  EXPECT_FALSE(Stage(plan, "motion")["run"].get<bool>());
-  EXPECT_NE(Stage(plan, "motion")["why"].get<std::string>().find(
+  EXPECT_FALSE(PlanStage(plan, "motion")["run"].get<bool>());
+  EXPECT_NE(PlanStage(plan, "motion")["why"].get<std::string>().find(
                 "no dynamic content"),
             std::string::npos);
-  EXPECT_NE(
-      Stage(plan, "expansion")["why"].get<std::string>().find("--no-expansion"),
-      std::string::npos);
-  EXPECT_FALSE(Stage(plan, "eval")["run"].get<bool>());
+  EXPECT_NE(PlanStage(plan, "expansion")["why"].get<std::string>().find(
+                "--no-expansion"),
+            std::string::npos);
+  EXPECT_FALSE(PlanStage(plan, "eval")["run"].get<bool>());
   EXPECT_FALSE(plan["results"].contains("eval"));
   const nlohmann::json fit = ReadJson(ws / "pano4d/fit.json");
   EXPECT_EQ(fit["motion_bases"], 0);

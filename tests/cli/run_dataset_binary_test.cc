@@ -13,6 +13,7 @@
 
 #include "colmap_ext/colmap_runner.h"
 #include "src/core/json.h"
+#include "tests/support/plan_json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -20,17 +21,10 @@ namespace {
 namespace fs = std::filesystem;
 using testing::Slurp;
 
+using testing::PlanStage;
 using testing::RunPano4d;
 const char* kShortFit =
     " --iterations 40 --expand-every 20 --validate-every 20";
-
-const nlohmann::json& Stage(const nlohmann::json& plan,
-                            const std::string& name) {
-  for (const auto& s : plan["stages"])
-    if (s["stage"] == name) return s;
-  ADD_FAILURE() << "no stage " << name << " in " << plan.dump(2);
-  return plan;
-}
 
 // The tiny synthetic scene twice: as generated (depth/ included) and with
 // depth/ deleted, the layout of a DyCheck capture without depth.
@@ -68,11 +62,11 @@ TEST_F(RunDatasetTest, WithoutDepthItTriangulatesRunsStereoAndEvaluates) {
   // The plan names the source, and the stages did what it said.
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "stereo");
-  EXPECT_TRUE(Stage(plan, "sfm")["run"].get<bool>());
-  EXPECT_NE(
-      Stage(plan, "sfm")["why"].get<std::string>().find("point_triangulator"),
-      std::string::npos);
-  EXPECT_NE(Stage(plan, "depth")["why"].get<std::string>().find("stereo"),
+  EXPECT_TRUE(PlanStage(plan, "sfm")["run"].get<bool>());
+  EXPECT_NE(PlanStage(plan, "sfm")["why"].get<std::string>().find(
+                "point_triangulator"),
+            std::string::npos);
+  EXPECT_NE(PlanStage(plan, "depth")["why"].get<std::string>().find("stereo"),
             std::string::npos);
   const nlohmann::json frames = ReadJson(ws / "pano4d/frames.json");
   EXPECT_EQ(frames["depth_source"], "stereo");
@@ -117,8 +111,9 @@ TEST_F(RunDatasetTest, DepthDirIsCheckedBeforeWorkThenAlignedToThePoints) {
   ASSERT_EQ(RunPano4d(run, log), 0) << Slurp(log);
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "external");
-  EXPECT_NE(Stage(plan, "depth")["why"].get<std::string>().find(maps.string()),
-            std::string::npos);
+  EXPECT_NE(
+      PlanStage(plan, "depth")["why"].get<std::string>().find(maps.string()),
+      std::string::npos);
   EXPECT_EQ(ReadJson(ws / "pano4d/frames.json")["depth_source"], "external");
   const nlohmann::json alignment = ReadJson(ws / "pano4d/depth/alignment.json");
   EXPECT_FALSE(alignment.empty());
@@ -135,7 +130,7 @@ TEST_F(RunDatasetTest, ASceneWithDepthKeepsItsDepth) {
       << Slurp(log);
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["depth_source"], "dataset");
-  EXPECT_FALSE(Stage(plan, "sfm")["run"].get<bool>());
+  EXPECT_FALSE(PlanStage(plan, "sfm")["run"].get<bool>());
   EXPECT_FALSE(fs::exists(ws / "database.db"));
   EXPECT_EQ(ReadJson(ws / "pano4d/frames.json")["depth_source"], "dataset");
 }

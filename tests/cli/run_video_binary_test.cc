@@ -15,25 +15,19 @@
 #include "src/core/json.h"
 #include "src/core/subprocess.h"
 #include "src/datasets/dataset.h"
+#include "tests/support/plan_json.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
 namespace {
 namespace fs = std::filesystem;
+using testing::PlanStage;
 using testing::RunPano4d;
 using testing::Slurp;
 
 // Textured frames the mapper poses, then as many uniformly grey frames,
 // which have no keypoints at all.
 constexpr int kTexturedFrames = 12;
-
-const nlohmann::json& Stage(const nlohmann::json& plan,
-                            const std::string& name) {
-  for (const auto& s : plan["stages"])
-    if (s["stage"] == name) return s;
-  ADD_FAILURE() << "no stage " << name << " in " << plan.dump(2);
-  return plan;
-}
 
 class RunVideoTest : public ::testing::Test {
  protected:
@@ -88,8 +82,9 @@ TEST_F(RunVideoTest, TooFewFramesPosedStopsTheRunNamingShareAndCause) {
   EXPECT_GE(posed, 3) << "the textured half should be posed";
   // The plan said so before the run began, and the error says the share,
   // the cause and what to try.
-  EXPECT_NE(Stage(plan, "sfm")["why"].get<std::string>().find("--min-posed"),
-            std::string::npos);
+  EXPECT_NE(
+      PlanStage(plan, "sfm")["why"].get<std::string>().find("--min-posed"),
+      std::string::npos);
   EXPECT_EQ(plan["results"]["sfm"]["status"], "too few frames posed");
   EXPECT_NE(out.find(std::to_string(posed) + " of " +
                      std::to_string(2 * kTexturedFrames) + " frames posed"),
@@ -138,7 +133,7 @@ TEST_F(RunVideoTest, APanIsPosedRotationOnlyAndTheRunSaysWhyItStops) {
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["camera_motion"], "rotation-only");
   EXPECT_EQ(plan["facts"]["sfm_posed"], plan["facts"]["sfm_frames"]);
-  EXPECT_NE(Stage(plan, "sfm")["why"].get<std::string>().find(
+  EXPECT_NE(PlanStage(plan, "sfm")["why"].get<std::string>().find(
                 "rotation-only camera model"),
             std::string::npos);
   EXPECT_EQ(plan["results"]["sfm"]["status"], "rotation-only");
@@ -163,7 +158,7 @@ TEST_F(RunVideoTest, APanIsPosedRotationOnlyAndTheRunSaysWhyItStops) {
             0)
       << Slurp(depth_log);
   const nlohmann::json done = ReadJson(ws / "pano4d/plan.json");
-  EXPECT_NE(Stage(done, "depth")["why"].get<std::string>().find("as given"),
+  EXPECT_NE(PlanStage(done, "depth")["why"].get<std::string>().find("as given"),
             std::string::npos);
   EXPECT_TRUE(fs::exists(ws / "pano4d/fit.json"));
 }
