@@ -50,8 +50,10 @@ void AddSynthCommand(CLI::App& app, Action* action) {
          },
          "How the training camera moves: arc (default), slow-arc (an "
          "eighth of the arc: little parallax), pan (a fixed centre, "
-         "turning), static-camera; the cases casual videos bring SfM")
-      ->check(CLI::IsMember({"arc", "slow-arc", "pan", "static-camera"}));
+         "turning), static-camera, handheld-still (drift and tremor of about "
+         "a pixel); the cases casual videos bring SfM and the masks")
+      ->check(CLI::IsMember(
+          {"arc", "slow-arc", "pan", "static-camera", "handheld-still"}));
   sub->callback([action, o] {
     *action = [o] {
       Timer timer;

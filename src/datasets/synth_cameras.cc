@@ -58,6 +58,8 @@ const char* TrainingMotionName(TrainingMotion motion) {
       return "pan";
     case TrainingMotion::kStatic:
       return "static-camera";
+    case TrainingMotion::kHandheldStill:
+      return "handheld-still";
   }
   return "arc";
 }
@@ -65,11 +67,11 @@ const char* TrainingMotionName(TrainingMotion motion) {
 TrainingMotion TrainingMotionFromName(const std::string& name) {
   for (const TrainingMotion m :
        {TrainingMotion::kArc, TrainingMotion::kSlowArc, TrainingMotion::kPan,
-        TrainingMotion::kStatic}) {
+        TrainingMotion::kStatic, TrainingMotion::kHandheldStill}) {
     if (name == TrainingMotionName(m)) return m;
   }
   throw Error("synth", "--trajectory", name,
-              "expected arc, slow-arc, pan or static-camera");
+              "expected arc, slow-arc, pan, static-camera or handheld-still");
 }
 
 std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
@@ -79,6 +81,12 @@ std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
   // The slow arc sweeps an eighth of the arc: at the default 56 degrees,
   // 7 degrees, about the parallax of a slow handheld step.
   constexpr double kSlowArcShare = 1.0 / 8;
+  // A hand holding the camera still: a tenth of the arc's drift, and a
+  // tremor of 3 mm at the target (0.06 degrees, half a pixel at 480x360).
+  constexpr double kHandheldDriftShare = 1.0 / 10;
+  constexpr double kTremorMetres = 0.003;
+  std::mt19937 tremor_rng(seed * 31U + 13U);
+  std::normal_distribution<double> tremor(0.0, kTremorMetres);
   const Layout& l = scene.layout;
   const auto eye_at = [&](double azimuth_degrees) {
     const double a = azimuth_degrees * kDegrees;
@@ -120,6 +128,15 @@ std::vector<PosedCamera> TrainingTrajectory(const Scene& scene,
         cameras.push_back(
             LookAt(intrinsics, eye_at(kTrainingAzimuth), scene.target));
         break;
+      case TrainingMotion::kHandheldStill: {
+        const Eigen::Vector3d shake(tremor(tremor_rng), tremor(tremor_rng),
+                                    tremor(tremor_rng));
+        cameras.push_back(LookAt(
+            intrinsics,
+            eye_at(kTrainingAzimuth) + kHandheldDriftShare * position_sway,
+            scene.target + kHandheldDriftShare * aim_sway + shake));
+        break;
+      }
     }
   }
   return cameras;

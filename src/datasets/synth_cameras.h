@@ -15,12 +15,14 @@ PosedCamera LookAt(const Camera& intrinsics, const Eigen::Vector3d& eye,
 
 // How the training camera moves, for casual-video cases SfM finds hard.
 enum class TrainingMotion {
-  kArc,      // the layout's arc (56 degrees by default)
-  kSlowArc,  // the same arc's middle eighth: little parallax
-  kPan,      // a fixed centre at the arc's middle, turning: no parallax
-  kStatic,   // one fixed camera at the arc's middle (sway and all)
+  kArc,            // the layout's arc (56 degrees by default)
+  kSlowArc,        // the same arc's middle eighth: little parallax
+  kPan,            // a fixed centre at the arc's middle, turning: no parallax
+  kStatic,         // one fixed camera at the arc's middle (sway and all)
+  kHandheldStill,  // held still by hand at the arc's middle: drift, tremor
 };
-// "arc", "slow-arc", "pan", "static-camera"; FromName throws pano4d::Error
+// "arc", "slow-arc", "pan", "static-camera", "handheld-still"; FromName
+// throws pano4d::Error
 // for another name.
 const char* TrainingMotionName(TrainingMotion motion);
 TrainingMotion TrainingMotionFromName(const std::string& name);
@@ -31,7 +33,9 @@ TrainingMotion TrainingMotionFromName(const std::string& name);
 // the slow arc, pan or static camera of `motion` at the arc's middle. A
 // pan turns the aim through the arc's sweep about the eye, which stays
 // where it is (no sway in position: a pure rotation); a static camera has
-// neither sway.
+// neither sway; a camera held still by hand drifts by a tenth of the arc's
+// sway and trembles from frame to frame (seeded, a few millimetres at the
+// target): flow of about a pixel, below what tells a moving camera.
 std::vector<PosedCamera> TrainingTrajectory(
     const Scene& scene, const Camera& intrinsics, int frames,
     std::uint32_t seed, TrainingMotion motion = TrainingMotion::kArc);

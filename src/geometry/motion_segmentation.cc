@@ -182,32 +182,57 @@ double InlierRatio(const std::vector<double>& residuals, double threshold) {
   return static_cast<double>(n) / residuals.size();
 }
 
+// The homography of the grid by LMedS, or kind kNone when it fails.
+PairModel FitHomography(PairModel model, const Grid& grid,
+                        const DynamicMaskOptions& o) {
+  const cv::Mat H = cv::findHomography(grid.from, grid.to, cv::LMEDS, 1.0,
+                                       cv::noArray(), 2000, o.lmeds_confidence);
+  // With more than seven points LMedS gives one 3x3 matrix or nothing.
+  if (H.rows == 3 && H.cols == 3) {
+    model.kind = PairModel::Kind::kHomography;
+    H.convertTo(cv::Mat(3, 3, CV_64F, model.M.val), CV_64F);
+  }
+  return model;
+}
+
+// A camera below the static threshold is still, or held still by hand: its
+// drift and tremor move the whole frame by about a pixel, which the flow
+// magnitude would take for motion and answer with a wide noise threshold
+// that hides a slow subject. The homography takes the place of the identity
+// when it halves the typical residual (a tremor explained); a camera that
+// truly stands still keeps the identity, which no outlier share can break
+// (LMedS breaks down when moving objects cover half the grid).
+constexpr double kTremorExplained = 0.5;
+
 // Chooses and fits the two-view model of i -> j (kind kNone when the grid
-// is too small or LMedS fails): the identity when the camera stands still,
-// else the fundamental matrix, or the homography when it explains the grid
-// about as well (no parallax to define the epipolar geometry).
+// is too small or LMedS fails): the identity or a homography when the camera
+// stands (nearly) still, else the fundamental matrix, or the homography when
+// it explains the grid about as well (no parallax to define the epipolar
+// geometry).
 PairModel FitModel(PairModel model, const Grid& grid, const WorkingGeometry& g,
                    const DynamicMaskOptions& o) {
   if (static_cast<int>(grid.from.size()) < o.min_correspondences) return model;
   if (UpperMedian(grid.motion) < g.static_motion_px) {
-    model.kind = PairModel::Kind::kStatic;
-    return model;
+    PairModel still = model;
+    still.kind = PairModel::Kind::kStatic;
+    const PairModel held = FitHomography(model, grid, o);
+    if (held.usable() && UpperMedian(GridResiduals(held, grid)) <
+                             kTremorExplained * UpperMedian(grid.motion)) {
+      return held;
+    }
+    return still;
   }
   const cv::Mat F = cv::findFundamentalMat(grid.from, grid.to, cv::FM_LMEDS,
                                            1.0, o.lmeds_confidence);
-  const cv::Mat H = cv::findHomography(grid.from, grid.to, cv::LMEDS, 1.0,
-                                       cv::noArray(), 2000, o.lmeds_confidence);
-  // With more than seven points LMedS gives one 3x3 matrix or nothing.
-  PairModel with_f = model, with_h = model;
+  PairModel with_f = model;
+  const PairModel with_h = FitHomography(model, grid, o);
   double f_inliers = -1.0, h_inliers = -1.0;
   if (F.rows == 3 && F.cols == 3) {
     with_f.kind = PairModel::Kind::kFundamental;
     F.convertTo(cv::Mat(3, 3, CV_64F, with_f.M.val), CV_64F);
     f_inliers = InlierRatio(GridResiduals(with_f, grid), g.residual_px);
   }
-  if (H.rows == 3 && H.cols == 3) {
-    with_h.kind = PairModel::Kind::kHomography;
-    H.convertTo(cv::Mat(3, 3, CV_64F, with_h.M.val), CV_64F);
+  if (with_h.usable()) {
     h_inliers = InlierRatio(GridResiduals(with_h, grid), g.residual_px);
   }
   if (h_inliers < 0.0) return with_f;  // kNone as well when F failed
@@ -392,6 +417,53 @@ cv::Mat FrameMask(const std::vector<Verdict>& verdicts, int i, int n,
   return mask;
 }
 
+// Consecutive pairs whose flow decides whether the camera is held still:
+// spread over the video, a handful of flows (milliseconds each).
+constexpr int kStillProbePairs = 8;
+
+// The median, over up to kStillProbePairs consecutive pairs spread over the
+// video, of the median flow length on the grid, below the static threshold.
+bool HeldStill(const std::vector<cv::Mat>& frames, const WorkingGeometry& g,
+               const DynamicMaskOptions& o) {
+  const int pairs = static_cast<int>(frames.size()) - 1;
+  if (pairs < 1) return false;
+  const int probes = std::min(pairs, kStillProbePairs);
+  std::vector<double> medians(probes);
+  cv::parallel_for_(cv::Range(0, probes), [&](const cv::Range& r) {
+    cv::Ptr<cv::DISOpticalFlow> dis =
+        cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+    for (int p = r.start; p < r.end; ++p) {
+      const int t = probes > 1 ? p * (pairs - 1) / (probes - 1) : 0;
+      cv::Mat flow;
+      dis->calc(ToWorkingGrey(frames[t], g.size),
+                ToWorkingGrey(frames[t + 1], g.size), flow);
+      std::vector<double> lengths;
+      for (int y = o.grid_step / 2; y < flow.rows; y += o.grid_step) {
+        for (int x = o.grid_step / 2; x < flow.cols; x += o.grid_step) {
+          const cv::Vec2f f = flow.at<cv::Vec2f>(y, x);
+          lengths.push_back(std::hypot(f[0], f[1]));
+        }
+      }
+      medians[p] = lengths.empty() ? 0.0 : UpperMedian(lengths);
+    }
+  });
+  return UpperMedian(medians) < g.static_motion_px;
+}
+
+// The options for this video: a camera held still gets the longer gaps and
+// the narrower margin.
+DynamicMaskOptions ForVideo(const DynamicMaskOptions& o, bool held_still) {
+  if (!held_still) return o;
+  DynamicMaskOptions out = o;
+  for (int gap : o.still_camera_gaps) {
+    if (std::find(out.frame_gaps.begin(), out.frame_gaps.end(), gap) ==
+        out.frame_gaps.end())
+      out.frame_gaps.push_back(gap);
+  }
+  out.dilation_radius = o.still_camera_dilation_radius;
+  return out;
+}
+
 }  // namespace
 
 void DynamicMaskOptions::Check() const {
@@ -426,6 +498,12 @@ void DynamicMaskOptions::Check() const {
   fraction("opening_radius", opening_radius, true);
   fraction("closing_radius", closing_radius, true);
   fraction("dilation_radius", dilation_radius, true);
+  fraction("still_camera_dilation_radius", still_camera_dilation_radius, true);
+  for (int gap : still_camera_gaps) {
+    if (gap <= 0) {
+      fail("still_camera_gaps", std::to_string(gap), "gaps must be positive");
+    }
+  }
   if (!(noise_factor >= 0.0)) {
     fail("noise_factor", std::to_string(noise_factor), "must be >= 0");
   }
@@ -469,28 +547,31 @@ std::string DynamicMaskStats::BriefReport() const {
     homography += f.homography ? 1 : 0;
     unjudged += f.neighbours_used == 0 ? 1 : 0;
   }
-  char line[320];
+  char line[360];
   std::snprintf(line, sizeof(line),
                 "dynamic masks: %zu frames, dynamic %.1f%% mean, %.1f%% max; "
                 "static camera in %d, homography in %d, no usable neighbour "
-                "in %d; %.2f s",
+                "in %d%s; %.2f s",
                 frames.size(), 100.0 * MeanDynamicFraction(),
-                100.0 * max_fraction, still, homography, unjudged, seconds);
+                100.0 * max_fraction, still, homography, unjudged,
+                held_still ? "; camera held still (longer gaps)" : "", seconds);
   return line;
 }
 
 std::vector<cv::Mat> ComputeDynamicMasks(const std::vector<cv::Mat>& frames,
-                                         const DynamicMaskOptions& options,
+                                         const DynamicMaskOptions& given,
                                          DynamicMaskStats* stats) {
   Timer timer;
-  options.Check();
+  given.Check();
   CheckFrames(frames);
   const int n = static_cast<int>(frames.size());
   std::vector<DynamicMaskFrameStats> frame_stats(n);
   std::vector<cv::Mat> masks(n);
   const cv::Size frame_size = n > 0 ? frames[0].size() : cv::Size();
   const WorkingGeometry g =
-      n > 0 ? MakeGeometry(frame_size, options) : WorkingGeometry{};
+      n > 0 ? MakeGeometry(frame_size, given) : WorkingGeometry{};
+  const bool held_still = HeldStill(frames, g, given);
+  const DynamicMaskOptions options = ForVideo(given, held_still);
   const std::vector<int>& gaps = options.frame_gaps;
   const int slots = 2 * static_cast<int>(gaps.size());  // t - gap, t + gap
 
@@ -545,6 +626,7 @@ std::vector<cv::Mat> ComputeDynamicMasks(const std::vector<cv::Mat>& frames,
     });
   }
   if (stats) {
+    stats->held_still = held_still;
     stats->frames = std::move(frame_stats);
     stats->seconds = timer.WallSeconds();
   }

@@ -20,6 +20,12 @@ struct DynamicMaskOptions {
   // they exist: small gaps see fast motion before the flow breaks, large
   // ones slow motion that small gaps cannot tell from noise. Positive, unique.
   std::vector<int> frame_gaps = {1, 2, 4};
+  // A camera held still (the median flow between consecutive frames below
+  // static_motion_threshold, sampled over the video) also compares frames
+  // these many frames apart: its background stays in view and in place, so
+  // long gaps cost no occlusion and add the votes that find a slow subject
+  // (the temporal accumulation a still camera needs). Positive.
+  std::vector<int> still_camera_gaps = {8, 16};
   // Flow is computed on frames resampled (up or down) so that their longer
   // side has this many pixels: bounded time, and flow noise in working
   // pixels that does not depend on the input size.
@@ -65,6 +71,10 @@ struct DynamicMaskOptions {
   double opening_radius = 0.004;
   double closing_radius = 0.015;
   double dilation_radius = 0.01;
+  // The margin for a camera held still: the masks of such a video serve the
+  // fit more than SfM (no parallax for the mapper to protect), and the fit
+  // loses whatever the margin marks.
+  double still_camera_dilation_radius = 0.0075;
 
   // Throws pano4d::Error naming the wrong field.
   void Check() const;
@@ -85,16 +95,21 @@ struct DynamicMaskFrameStats {
 
 struct DynamicMaskStats {
   std::vector<DynamicMaskFrameStats> frames;
+  // The camera was held still: still_camera_gaps and
+  // still_camera_dilation_radius applied.
+  bool held_still = false;
   double seconds = 0.0;  // wall time of ComputeDynamicMasks
 
   double MeanDynamicFraction() const;
   // One line for logs: frames, mean and max dynamic fraction, frames judged
   // with the static-camera or homography fallback or without any usable
-  // neighbour, time.
+  // neighbour, whether the camera was held still, time.
   std::string BriefReport() const;
 };
 
-// One CV_8UC1 mask per frame, of the frame's size, 255 = dynamic. Frames are
+// One CV_8UC1 mask per frame, of the frame's size, 255 = dynamic. A video
+// whose camera is held still is judged with the options' still_camera_*
+// settings (stats->held_still says so). Frames are
 // 8-bit, 16-bit or float (in [0, 1]) with 1, 3 or 4 channels, all of one
 // size (channel order only weighs the grey conversion, so RGB works too).
 // A single frame gives an all-static mask (nothing to compare with); no

@@ -310,10 +310,9 @@ TEST_F(DynamicMasksTest, StaticCameraMarksTheMovingObjectByItsFlow) {
 
 // The synthetic scene filmed by a camera that stands still (synth
 // --trajectory static-camera): its moving objects must be found by their
-// flow. Issue 36 asks 80% of the objects' pixels at 5% false positives;
-// measured: recall 0.808 at 5.2%, all but 0.02% of them within the
-// deliberate safety margin around the objects (dilation_radius), hence the
-// bounds below: the far false positives at the 1% of the other tests.
+// flow. Issue 36 asks 80% of the objects' pixels at 5% false positives.
+// The video is judged held still (longer gaps, a narrower margin); the far
+// false positives stay at the 1% of the other tests.
 TEST(DynamicMasksStaticCameraTest, SlowObjectsBeforeAStillCameraAreFound) {
   testing::TempDir dir;
   synth::GenerateSynthScene({.preset = "small",
@@ -325,10 +324,40 @@ TEST(DynamicMasksStaticCameraTest, SlowObjectsBeforeAStillCameraAreFound) {
   const Scores s =
       Score(ComputeDynamicMasks(video.frames, {}, &stats), video.truth);
   Print("static camera, synthetic small scene", s, stats);
+  EXPECT_TRUE(stats.held_still);
   for (const DynamicMaskFrameStats& f : stats.frames)
     EXPECT_TRUE(f.static_camera);
   EXPECT_GE(s.recall, 0.8);
-  EXPECT_LE(s.false_positive_rate, 0.06);
+  EXPECT_LE(s.false_positive_rate, 0.05);
+  EXPECT_LE(s.far_false_positive_rate, 0.01);
+}
+
+// The same scene filmed by a camera held still by hand (synth --trajectory
+// handheld-still): its drift and tremor move the frame by about a pixel,
+// below the static threshold. Judged by the flow magnitude, that motion
+// widened the noise threshold until the slow objects faded from the masks
+// (the issue's nearly still clip; recall 0.68 here); a homography explains
+// it instead, and the video is judged held still.
+TEST(DynamicMasksStaticCameraTest, ACameraHeldStillByHandStillFindsTheObjects) {
+  testing::TempDir dir;
+  synth::GenerateSynthScene(
+      {.preset = "small",
+       .seed = 0,
+       .trajectory = synth::TrainingMotion::kHandheldStill},
+      dir / "scene");
+  const Video video = ReadSynthVideo(dir / "scene", "2x", 48);
+  DynamicMaskStats stats;
+  const Scores s =
+      Score(ComputeDynamicMasks(video.frames, {}, &stats), video.truth);
+  Print("camera held still by hand, synthetic small scene", s, stats);
+  int with_homography = 0;
+  for (const DynamicMaskFrameStats& f : stats.frames) {
+    with_homography += f.homography ? 1 : 0;
+  }
+  EXPECT_TRUE(stats.held_still);
+  EXPECT_GE(with_homography, 24);
+  EXPECT_GE(s.recall, 0.75);
+  EXPECT_LE(s.false_positive_rate, 0.05);
   EXPECT_LE(s.far_false_positive_rate, 0.01);
 }
 
@@ -354,6 +383,7 @@ TEST_F(DynamicMasksTest, PanningCameraIsJudgedByAHomography) {
   for (const DynamicMaskFrameStats& f : stats.frames) {
     with_homography += f.homography ? 1 : 0;
   }
+  EXPECT_FALSE(stats.held_still);
   EXPECT_GE(with_homography, 6);
   EXPECT_GT(s.recall, 0.9);
   EXPECT_LT(s.far_false_positive_rate, 0.01);
