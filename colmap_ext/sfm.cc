@@ -12,6 +12,7 @@
 #include "colmap_ext/database.h"
 #include "colmap_ext/masks.h"
 #include "colmap_ext/model.h"
+#include "colmap_ext/register_left_out.h"
 #include "colmap_ext/rotation_only_model.h"
 #include "colmap_ext/sfm_diagnosis.h"
 #include "src/core/camera.h"
@@ -580,6 +581,34 @@ SfmReport RunSfm(const SfmOptions& o) {
                                 (logs / "mapper.log").string());
           }
         });
+    // Frames the mapper left out, posed by PnP against its points; the
+    // log file says how many, for a later run that skips the step.
+    const fs::path left_out_json = logs / "register_left_out.json";
+    step(
+        "register_left_out", {{"frames", report.frames}},
+        [&] {
+          return fs::exists(left_out_json) &&
+                 DetectModelFormat(sparse / "0").has_value();
+        },
+        [&] {
+          ColmapModel model = ReadModel(sparse / "0");
+          const LeftOutReport left_out =
+              RegisterLeftOutFrames(database, &model);
+          if (!left_out.posed.empty()) {
+            // The whole model swapped in at once: a killed run leaves the
+            // mapper's model or this one, never a mixture.
+            const fs::path next = sparse / "0.left_out";
+            fs::remove_all(next);
+            WriteModel(model, next, ColmapFormat::kBinary);
+            fs::remove_all(sparse / "0");
+            fs::rename(next, sparse / "0");
+          }
+          WriteJson(left_out_json, {{"left_out", left_out.left_out},
+                                    {"posed", left_out.posed}});
+        });
+    report.posed_by_pnp = static_cast<int>(
+        GetJson<Json>(ReadJson(left_out_json), "posed", left_out_json.string())
+            .size());
   }
   report.models = static_cast<int>(ModelFolders(sparse).size());
   report.model = sparse / "0";
@@ -629,6 +658,7 @@ SfmReport RunSfm(const SfmOptions& o) {
   nlohmann::json summary = {
       {"frames", report.frames},
       {"registered", report.registered},
+      {"posed_by_pnp", report.posed_by_pnp},
       {"posed_fraction", report.diagnosis.PosedFraction()},
       {"camera_motion", report.CameraMotion()},
       {"diagnosis", report.diagnosis.ToJson()},

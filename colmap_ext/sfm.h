@@ -59,6 +59,8 @@ struct SfmStepReport {
 struct SfmReport {
   int frames = 0;
   int registered = 0;
+  // Of those, frames the mapper left out and register_left_out.h posed.
+  int posed_by_pnp = 0;
   int points3D = 0;
   double mean_reprojection_error = 0.0;  // pixels, mean over the 3D points
   int models = 0;                        // models the mapper produced
@@ -81,7 +83,8 @@ struct SfmReport {
 // feature_extractor, matcher, mapper (the largest model becomes
 // WS/sparse/0; instead, when nearly every verified pair fits a homography
 // and rotations alone explain the matches, the rotation-only model of
-// src/geometry/rotation_only.h), image_undistorter
+// src/geometry/rotation_only.h), the frames it left out posed by PnP
+// (register_left_out.h), image_undistorter
 // when the camera model has distortion.
 // Writes WS/pano4d/sfm.json (with posed_fraction and the diagnosis of the
 // unposed frames) and WS/pano4d/logs/timings.json. Throws

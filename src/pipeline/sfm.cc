@@ -69,6 +69,12 @@ std::string SfmStageSummary::FullReport() const {
       "reprojection error %.3f px, %d model(s)\n",
       r.registered, r.frames, 100.0 * r.diagnosis.PosedFraction(), r.points3D,
       r.mean_reprojection_error, r.models);
+  if (r.posed_by_pnp > 0) {
+    s += StringPrintf(
+        "  %d of them left out by the mapper and posed by PnP against its "
+        "points\n",
+        r.posed_by_pnp);
+  }
   if (r.static_camera) {
     s += "  camera: static (one pose for every frame: the frames match by "
          "the identity; no points)\n";

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -14,6 +15,7 @@
 #include "colmap_ext/alignment.h"
 #include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/model.h"
+#include "colmap_ext/register_left_out.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/image.h"
@@ -122,6 +124,67 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
+}
+
+// Frames taken out of the mapper's model come back by PnP against its
+// points (register_left_out.h), at the poses the mapper had given them; in
+// a run where the mapper poses every frame, the step poses none.
+TEST_F(SfmTest, FramesLeftOutOfTheModelArePosedByPnpWhereTheMapperHadThem) {
+  SfmOptions options;
+  options.images = *dir_ / "train";
+  options.workspace = *dir_ / "ws_left_out";
+  options.matcher = "sequential";
+  const SfmReport report = RunSfm(options);
+  ASSERT_GE(report.registered, 0.9 * report.frames);
+  const nlohmann::json sfm_json =
+      ReadJson(*dir_ / "ws_left_out" / "pano4d" / "sfm.json");
+  EXPECT_EQ(sfm_json.at("posed_by_pnp"), report.posed_by_pnp);
+
+  // The mapper's model (sparse/0: the database's keypoints, before
+  // undistortion) without four frames and their observations.
+  const fs::path database = *dir_ / "ws_left_out" / "database.db";
+  const ColmapModel mapped = ReadModel(*dir_ / "ws_left_out" / "sparse" / "0");
+  ColmapModel model = mapped;
+  std::set<std::uint32_t> removed;
+  for (const std::size_t k : {std::size_t{5}, std::size_t{17}, std::size_t{18},
+                              mapped.images.size() - 3}) {
+    removed.insert(mapped.images[k].image_id);
+  }
+  std::erase_if(model.images, [&](const ColmapImage& image) {
+    return removed.count(image.image_id) > 0;
+  });
+  for (ColmapPoint3D& point : model.points3D) {
+    std::erase_if(point.track, [&](const ColmapTrackElement& e) {
+      return removed.count(e.image_id) > 0;
+    });
+  }
+  model.BuildIndex();
+
+  const LeftOutReport left_out = RegisterLeftOutFrames(database, &model);
+  EXPECT_EQ(left_out.left_out, report.frames - report.registered +
+                                   static_cast<int>(removed.size()));
+  EXPECT_EQ(left_out.posed.size(), removed.size());
+  EXPECT_NO_THROW(model.Check("the model with the frames posed by PnP"));
+  std::vector<Eigen::Vector3d> centres;
+  for (const ColmapImage& image : mapped.images)
+    centres.push_back(image.Center());
+  const double extent = RobustExtent(centres);
+  for (const std::uint32_t id : removed) {
+    const ColmapImage* posed = model.FindImage(id);
+    ASSERT_NE(posed, nullptr) << "image " << id << " was not posed again";
+    const ColmapImage& truth = *mapped.FindImage(id);
+    const double degrees = posed->CamFromWorld().rotation.angularDistance(
+                               truth.CamFromWorld().rotation) *
+                           180 / M_PI;
+    const double offset = (posed->Center() - truth.Center()).norm() / extent;
+    std::printf(
+        "%s: %zu observations, %.4f degrees, centre %.3f%% of the "
+        "trajectory's extent from the mapper's\n",
+        posed->name.c_str(), posed->NumPoints3D(), degrees, 100 * offset);
+    EXPECT_GE(posed->NumPoints3D(), 15u);
+    EXPECT_LT(degrees, 0.2);
+    EXPECT_LT(offset, 0.01);
+  }
 }
 
 // One frame of another size stops sfm; once the frame is replaced the
