@@ -120,9 +120,12 @@ std::optional<Pose> SolvePose(const std::vector<Correspondence>& candidates,
   return out;
 }
 
-// Adds the frame to `model` with its keypoints and inlier observations.
+// Adds the frame to `model` with its keypoints and inlier observations;
+// `point_index` maps a point id to its place in model->points3D. The
+// caller rebuilds the model's index.
 void AddFrame(const DatabaseImage& frame,
               const std::vector<Eigen::Vector2d>& keypoints, const Pose& pose,
+              const std::map<std::uint64_t, std::size_t>& point_index,
               ColmapModel* model) {
   ColmapImage image;
   image.image_id = frame.image_id;
@@ -132,9 +135,6 @@ void AddFrame(const DatabaseImage& frame,
   image.points2D.resize(keypoints.size());
   for (std::size_t k = 0; k < keypoints.size(); ++k)
     image.points2D[k].xy = keypoints[k];
-  std::map<std::uint64_t, std::size_t> point_index;
-  for (std::size_t i = 0; i < model->points3D.size(); ++i)
-    point_index[model->points3D[i].point3D_id] = i;
   std::set<std::uint64_t> observed;  // one observation per point and image
   for (const Correspondence& c : pose.inliers) {
     if (!observed.insert(c.point3D_id).second) continue;
@@ -143,7 +143,6 @@ void AddFrame(const DatabaseImage& frame,
         {frame.image_id, c.keypoint});
   }
   model->images.push_back(std::move(image));
-  model->BuildIndex();
 }
 
 }  // namespace
@@ -163,6 +162,10 @@ LeftOutReport RegisterLeftOutFrames(const std::filesystem::path& database,
   const std::vector<DatabasePair> pairs =
       ReadDatabasePairs(database, /*with_matches=*/true);
   const auto keypoints = ReadDatabaseKeypoints(database);
+  // Points are only observed here, never added: one index serves all.
+  std::map<std::uint64_t, std::size_t> point_index;
+  for (std::size_t i = 0; i < model->points3D.size(); ++i)
+    point_index[model->points3D[i].point3D_id] = i;
   std::map<std::uint32_t, std::vector<const DatabasePair*>> pairs_of;
   for (const DatabasePair& pair : pairs) {
     pairs_of[pair.image_id1].push_back(&pair);
@@ -191,13 +194,14 @@ LeftOutReport RegisterLeftOutFrames(const std::filesystem::path& database,
           SolvePose(correspondences, kp->second, ToCamera(*camera, "model"),
                     *model, options);
       if (!pose) continue;
-      AddFrame(*frame, kp->second, *pose, model);
+      AddFrame(*frame, kp->second, *pose, point_index, model);
       report.posed.push_back(frame->name);
       PANO4D_LOG(kInfo) << "sfm: posed left-out frame " << frame->name
                         << " by PnP on " << pose->inliers.size() << " of "
                         << correspondences.size() << " correspondences";
       progress = true;
     }
+    model->BuildIndex();
     std::erase_if(left_out, [&](const DatabaseImage* frame) {
       return model->FindImage(frame->image_id) != nullptr;
     });

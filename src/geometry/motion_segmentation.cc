@@ -213,14 +213,13 @@ PairModel FitModel(PairModel model, const Grid& grid, const WorkingGeometry& g,
                    const DynamicMaskOptions& o) {
   if (static_cast<int>(grid.from.size()) < o.min_correspondences) return model;
   if (UpperMedian(grid.motion) < g.static_motion_px) {
-    PairModel still = model;
-    still.kind = PairModel::Kind::kStatic;
     const PairModel held = FitHomography(model, grid, o);
     if (held.usable() && UpperMedian(GridResiduals(held, grid)) <
                              kTremorExplained * UpperMedian(grid.motion)) {
       return held;
     }
-    return still;
+    model.kind = PairModel::Kind::kStatic;
+    return model;
   }
   const cv::Mat F = cv::findFundamentalMat(grid.from, grid.to, cv::FM_LMEDS,
                                            1.0, o.lmeds_confidence);
@@ -437,13 +436,9 @@ bool HeldStill(const std::vector<cv::Mat>& frames, const WorkingGeometry& g,
       cv::Mat flow;
       dis->calc(ToWorkingGrey(frames[t], g.size),
                 ToWorkingGrey(frames[t + 1], g.size), flow);
-      std::vector<double> lengths;
-      for (int y = o.grid_step / 2; y < flow.rows; y += o.grid_step) {
-        for (int x = o.grid_step / 2; x < flow.cols; x += o.grid_step) {
-          const cv::Vec2f f = flow.at<cv::Vec2f>(y, x);
-          lengths.push_back(std::hypot(f[0], f[1]));
-        }
-      }
+      const cv::Mat every_pixel = cv::Mat::ones(flow.size(), CV_8U);
+      const std::vector<double> lengths =
+          SampleGrid(flow, every_pixel, PairModel{}, o.grid_step).motion;
       medians[p] = lengths.empty() ? 0.0 : UpperMedian(lengths);
     }
   });
