@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Installs the Debian packages pano4d needs (only those missing), then
-# configures and builds Release into build/ (ccache when present).
+# Installs the Debian packages pano4d needs (only those missing) and the
+# web viewer's pinned npm libraries (src/viewer/package-lock.json, `npm
+# ci`, only when the lockfile changed), then configures and builds
+# Release into build/ (ccache when present).
 # Idempotent and quiet: a second run installs nothing and rebuilds nothing.
 #   PANO4D_BUILD_DIR  build directory (default: build)
 #   PANO4D_JOBS       parallel compile jobs (default: nproc)
@@ -21,10 +23,29 @@ PACKAGES=(
   libceres-dev libpcl-dev libflann-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
   colmap
+  chromium  # the browser test of `pano4d view` (headless, software WebGL)
 )
 
 source scripts/apt.sh
 apt_install "${PACKAGES[@]}"
+# Node's npm, unless one is there already (e.g. from NodeSource).
+command -v npm >/dev/null || apt_install nodejs npm
+
+# The viewer's libraries (three.js, Spark), exactly as the lockfile pins
+# them; `pano4d view` copies them beside each scene.
+viewer=src/viewer
+lock_sum=$(sha256sum "$viewer/package-lock.json" | cut -d' ' -f1)
+if [[ ! -f $viewer/node_modules/.pano4d-lock || $(cat "$viewer/node_modules/.pano4d-lock") != "$lock_sum" ]]; then
+  npm_log=$(mktemp -t pano4d-npm.XXXXXX.log)
+  npm_start=$SECONDS
+  if ! npm ci --prefix "$viewer" --no-audit --no-fund --loglevel=error >"$npm_log" 2>&1; then
+    tail -n 30 "$npm_log" >&2
+    echo "pano4d setup: npm ci in $viewer failed; the full log is $npm_log" >&2
+    exit 1
+  fi
+  echo "$lock_sum" >"$viewer/node_modules/.pano4d-lock"
+  echo "pano4d: viewer libraries installed (npm ci) in $((SECONDS - npm_start)) s"
+fi
 
 start=$SECONDS
 mkdir -p "$BUILD_DIR"

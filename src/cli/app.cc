@@ -60,6 +60,7 @@ int Main(int argc, char** argv) {
   AddDemoCommand(app, &action);
   AddRenderCommand(app, &action);
   AddExportCommand(app, &action);
+  AddViewCommand(app, &action);
 
   try {
     app.parse(argc, argv);

@@ -42,5 +42,6 @@ void AddRunCommand(CLI::App& app, Action* action);
 void AddDemoCommand(CLI::App& app, Action* action);
 void AddRenderCommand(CLI::App& app, Action* action);
 void AddExportCommand(CLI::App& app, Action* action);
+void AddViewCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

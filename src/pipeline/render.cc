@@ -10,8 +10,10 @@
 #include "src/core/json.h"
 #include "src/core/progress.h"
 #include "src/core/strings.h"
+#include "src/gs/scene4d.h"
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/scene_outputs.h"
+#include "src/pipeline/view.h"
 #include "src/render/ply.h"
 
 namespace pano4d {
@@ -111,11 +113,15 @@ RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
 
 std::string ExportSummary::FullReport() const {
   return StringPrintf(
-      "pano4d export: %d PLY file(s) (%zu Gaussians each%s) in %s\n"
+      "pano4d export: %d PLY file(s) (%zu Gaussians each%s) in %s, %.2f MB, "
+      "listed in %s\n"
+      "  compact 4D scene: %s + %s, %.2f MB (%.1fx smaller)\n"
       "  cameras: %zu training and %zu expanded, as a COLMAP model in %s\n",
       ply_files, gaussians, motion ? ", one file per time step" : ", no motion",
-      (out / "ply").c_str(), training_cameras, expanded_cameras,
-      (out / "colmap").c_str());
+      (out / "ply").c_str(), ply_bytes / 1e6, manifest.filename().c_str(),
+      (out / kScene4dJson).c_str(), kScene4dBinary, scene4d_bytes / 1e6,
+      scene4d_bytes > 0 ? double(ply_bytes) / scene4d_bytes : 0.0,
+      training_cameras, expanded_cameras, (out / "colmap").c_str());
 }
 
 ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
@@ -127,11 +133,17 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
   const GaussianScene& scene = fitted.scene;
   GaussianModel posed;
   summary.motion = scene.has_motion();
+  // The manifest of the sequence: one PLY per time, the same Gaussians in
+  // the same order in each (static rows first), so that a player can
+  // step through the files by name or by this list.
+  Json files = Json::array();
   if (summary.motion) {
     ProgressBar bar("export ply", scene.num_times);
     for (int t = 0; t < scene.num_times; ++t) {
       scene.ComposeAt(t, &posed);
-      WritePly(ply / ("t_" + ZeroPadded(t, 5) + ".ply"), posed);
+      const std::string name = "t_" + ZeroPadded(t, 5) + ".ply";
+      WritePly(ply / name, posed);
+      files.push_back({{"file", name}, {"time", t}});
       ++summary.ply_files;
       bar.Add();
     }
@@ -140,9 +152,21 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
     // No motion: one scene holds for every time.
     scene.ComposeAt(0, &posed);
     WritePly(ply / "static.ply", posed);
+    files.push_back({{"file", "static.ply"}, {"time", 0}});
     summary.ply_files = 1;
   }
   summary.gaussians = posed.size();
+  WriteJson(ply / kPlySequenceManifest,
+            {{"format", "pano4d-ply-sequence"},
+             {"version", 1},
+             {"num_times", scene.num_times},
+             {"fps", kExportFps},
+             {"gaussians", posed.size()},
+             {"static_gaussians", scene.statics.size()},
+             {"sh_degree", posed.sh_degree},
+             {"same_order", true},
+             {"frames", files}});
+  summary.manifest = ply / kPlySequenceManifest;
   std::vector<SourceCamera> sources;
   for (const WorkspaceFrame& f : fitted.frames.train)
     sources.push_back({f.name, RasterCamera::FromPosed(f.camera)});
@@ -153,6 +177,11 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
   WriteTrajectories(summary.out, expanded, sources);
   summary.training_cameras = sources.size();
   summary.expanded_cameras = expanded.size();
+  // The compact 4D form, which `pano4d view`'s page loads.
+  summary.scene4d_bytes =
+      WriteScene4d(summary.out, scene, SceneExtras(fitted, expanded));
+  for (const Json& f : files)
+    summary.ply_bytes += fs::file_size(ply / f["file"].get<std::string>());
   return summary;
 }
 

@@ -4,6 +4,7 @@
 // spiral, bullet time, or a camera file), and the scene as 3DGS PLY per time
 // step with its cameras as a COLMAP model.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -44,6 +45,11 @@ struct RenderSummary {
 RenderSummary RunRender(const Workspace& workspace,
                         const RenderOptions& options);
 
+// The PLY sequence's manifest (OUT/ply/sequence.json) and the frame rate
+// it suggests, render's default --fps.
+inline constexpr const char* kPlySequenceManifest = "sequence.json";
+inline constexpr double kExportFps = 10.0;
+
 struct ExportOptions {
   std::filesystem::path out;  // empty: WS/pano4d/export
 };
@@ -54,11 +60,18 @@ struct ExportSummary {
   std::size_t gaussians = 0;  // per file
   bool motion = false;        // one file per time step
   std::size_t training_cameras = 0, expanded_cameras = 0;
+  std::filesystem::path manifest;   // OUT/ply/sequence.json
+  std::uint64_t ply_bytes = 0;      // all PLY files
+  std::uint64_t scene4d_bytes = 0;  // scene4d.json + scene4d.bin
   std::string FullReport() const;
 };
 
-// Writes OUT/ply/t_<time>.ply (OUT/ply/static.ply without motion),
-// OUT/trajectories.json and OUT/colmap/.
+// Writes OUT/ply/t_<time>.ply (OUT/ply/static.ply without motion) and
+// their manifest OUT/ply/sequence.json ({"format": "pano4d-ply-sequence",
+// "fps", "frames": [{"file", "time"}], ...}: the same Gaussians in the
+// same order in every file), the compact 4D scene OUT/scene4d.json and
+// OUT/scene4d.bin (src/gs/scene4d.h), OUT/trajectories.json and
+// OUT/colmap/.
 ExportSummary RunExport(const Workspace& workspace,
                         const ExportOptions& options);
 

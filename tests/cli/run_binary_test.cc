@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/json.h"
+#include "src/gs/scene4d.h"
+#include "src/render/ply.h"
 #include "tests/support/plan_json.h"
 #include "tests/support/test_files.h"
 
@@ -339,6 +341,68 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   const std::string images = Slurp(ws / "pano4d/export/colmap/images.txt");
   EXPECT_NE(images.find("source/"), std::string::npos);
   EXPECT_NE(images.find("step_01/dir_0/"), std::string::npos);
+  // The manifest lists every time's PLY in order; the compact form holds
+  // the same scene: its static Gaussians are the first rows of every PLY,
+  // in the same order, and its dynamic ones posed at a time are that
+  // time's other rows.
+  const fs::path exported = ws / "pano4d/export";
+  const nlohmann::json manifest = ReadJson(exported / "ply/sequence.json");
+  EXPECT_EQ(manifest["format"], "pano4d-ply-sequence");
+  ASSERT_EQ(manifest["frames"].size(), frames["num_times"].get<std::size_t>());
+  const GaussianScene scene = ReadScene4d(exported);
+  EXPECT_EQ(manifest["static_gaussians"], scene.statics.size());
+  GaussianModel posed;
+  for (std::size_t t = 0; t < manifest["frames"].size(); ++t) {
+    const nlohmann::json& f = manifest["frames"][t];
+    EXPECT_EQ(f["time"], t);
+    const GaussianModel ply =
+        ReadPly(exported / "ply" / f["file"].get<std::string>());
+    ASSERT_EQ(ply.size(), scene.size());
+    scene.ComposeAt(static_cast<int>(t), &posed);
+    for (std::size_t i = 0; i < scene.statics.size() * 3; ++i)
+      ASSERT_EQ(ply.means[i], posed.means[i])
+          << "time " << t << " row " << i / 3;
+    for (std::size_t i = scene.statics.size() * 3; i < ply.means.size(); ++i)
+      ASSERT_NEAR(ply.means[i], posed.means[i], 1e-2) << "time " << t;
+  }
+  EXPECT_NE(Slurp(log).find("compact 4D scene"), std::string::npos)
+      << Slurp(log);
+
+  // `view` writes the page, its libraries and the scene; here with a
+  // stand-in for npm's libraries (the browser test runs the real ones).
+  const fs::path libraries = dir_->path() / "viewer_sources";
+  for (const char* f :
+       {"index.html", "viewer.js",
+        "node_modules/three/build/three.module.min.js",
+        "node_modules/three/build/three.core.min.js",
+        "node_modules/three/examples/jsm/controls/OrbitControls.js",
+        "node_modules/three/examples/jsm/postprocessing/Pass.js",
+        "node_modules/@sparkjsdev/spark/dist/spark.module.min.js",
+        "node_modules/three/LICENSE",
+        "node_modules/@sparkjsdev/spark/LICENSE"}) {
+    fs::create_directories((libraries / f).parent_path());
+    testing::WriteText(libraries / f, std::string("stand-in ") + f);
+  }
+  const fs::path view = dir_->path() / "view";
+  const std::string with_sources = "PANO4D_VIEWER_DIR='" + libraries.string() +
+                                   "' " + PANO4D_BINARY_DIR + "/pano4d view" +
+                                   w + " --out '" + view.string() + "'";
+  ASSERT_EQ(testing::RunLogged(with_sources, log), 0) << Slurp(log);
+  for (const char* f : {"index.html", "viewer.js", "lib/spark.module.min.js",
+                        "lib/addons/controls/OrbitControls.js",
+                        "lib/LICENSE.spark.txt", "scene4d.json", "scene4d.bin"})
+    EXPECT_TRUE(fs::exists(view / f)) << f;
+  const nlohmann::json header = ReadJson(view / "scene4d.json");
+  EXPECT_EQ(header["extras"]["cameras"]["training"].size(),
+            frames["train"].size());
+  EXPECT_NE(Slurp(log).find("a PLY per time"), std::string::npos) << Slurp(log);
+  // Without npm's libraries: the file and the command that installs it.
+  fs::remove(libraries /
+             "node_modules/@sparkjsdev/spark/dist/spark.module.min.js");
+  EXPECT_EQ(testing::RunLogged(with_sources, log), 1);
+  EXPECT_NE(Slurp(log).find("spark.module.min.js"), std::string::npos)
+      << Slurp(log);
+  EXPECT_NE(Slurp(log).find("npm ci"), std::string::npos) << Slurp(log);
 }
 
 // The stiff and extreme suite: every case runs and counts values, none of
