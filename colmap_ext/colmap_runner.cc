@@ -3,6 +3,8 @@
 #include <algorithm>
 
 #include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/log.h"
 
 namespace pano4d {
 
@@ -20,12 +22,72 @@ ColmapRunner::ColmapRunner(std::filesystem::path executable)
   }
 }
 
+std::string ColmapRunner::Help(const std::vector<std::string>& args,
+                               const std::filesystem::path& log) const {
+  std::vector<std::string> argv = {executable_.string()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  EnsureDirectory(log.parent_path());
+  std::filesystem::remove(log);
+  const ProcessResult result = RunProcess(argv, log);
+  std::string command = "colmap";
+  for (const std::string& a : args) command += " " + a;
+  if (!result.ok()) {
+    throw Error("colmap", command, "",
+                "failed (" + result.How() + "); log: " + log.string());
+  }
+  return ReadTextFile(log);
+}
+
+const ColmapVersion& ColmapRunner::Version(
+    const std::filesystem::path& log_dir) const {
+  if (version_) return *version_;
+  const std::filesystem::path log = log_dir / "colmap_help.log";
+  const std::optional<ColmapVersion> v =
+      ParseColmapVersion(Help({"help"}, log));
+  if (!v) {
+    throw Error("colmap", "help", executable_.string(),
+                "printed no \"COLMAP <version>\" line (log: " + log.string() +
+                    "); is it COLMAP?");
+  }
+  if (!CheckColmapVersion(*v)) {
+    PANO4D_LOG(kWarning) << "colmap " << v->text
+                         << " is newer than the versions pano4d was tested "
+                            "with ("
+                         << kTestedColmapVersions
+                         << "); its options are checked before each run";
+  }
+  version_ = v;
+  return *version_;
+}
+
+std::vector<std::string> ColmapRunner::MapArgs(
+    const std::string& subcommand, const std::vector<std::string>& args,
+    const std::filesystem::path& log_dir) const {
+  const ColmapVersion& version = Version(log_dir);
+  auto found = options_.find(subcommand);
+  if (found == options_.end()) {
+    const std::string help =
+        Help({subcommand, "-h"}, log_dir / (subcommand + "_help.log"));
+    found = options_.emplace(subcommand, ParseColmapOptions(help)).first;
+  }
+  std::vector<std::string> mapped;
+  for (const std::string& a : args) {
+    mapped.push_back(a.rfind("--", 0) == 0
+                         ? "--" + MapColmapOption(a.substr(2), subcommand,
+                                                  found->second, version)
+                         : a);
+  }
+  return mapped;
+}
+
 ColmapRun ColmapRunner::Run(const std::string& subcommand,
                             const std::vector<std::string>& args,
                             const std::filesystem::path& log,
                             const std::string& remedy) const {
   std::vector<std::string> argv = {executable_.string(), subcommand};
-  argv.insert(argv.end(), args.begin(), args.end());
+  const std::vector<std::string> mapped =
+      MapArgs(subcommand, args, log.parent_path());
+  argv.insert(argv.end(), mapped.begin(), mapped.end());
   const ProcessResult result = RunProcess(argv, log);
   ColmapRun run{subcommand, log, result.seconds};
   if (result.ok()) return run;

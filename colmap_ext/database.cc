@@ -1,5 +1,7 @@
 #include "colmap_ext/database.h"
 
+#include <algorithm>
+
 #include <sqlite3.h>
 
 #include <functional>
@@ -50,6 +52,15 @@ void Query(const std::filesystem::path& database, const char* sql,
 }
 
 }  // namespace
+
+std::vector<std::string> SequentialMatcherOrder(
+    const std::filesystem::path& database) {
+  std::vector<std::string> names;
+  for (const DatabaseImage& image : ReadDatabaseImages(database))
+    names.push_back(image.name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 std::vector<DatabaseImage> ReadDatabaseImages(
     const std::filesystem::path& database) {

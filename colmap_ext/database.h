@@ -51,6 +51,13 @@ struct DatabasePair {
 std::vector<DatabaseImage> ReadDatabaseImages(
     const std::filesystem::path& database);
 
+// The order in which sequential_matcher pairs the database's images: by
+// name as byte strings, whatever the image ids (COLMAP 3.8 to 4.1 sort by
+// Image::Name in GetOrderedImageIds; feature_extractor's ids follow the
+// order its threads finish). Throws as ReadDatabaseImages.
+std::vector<std::string> SequentialMatcherOrder(
+    const std::filesystem::path& database);
+
 // The two_view_geometries table in pair id order (empty before a matcher
 // ran), with each pair's inlier matches when `with_matches`. Throws as
 // ReadDatabaseImages, and for a matches blob whose size disagrees with its

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "colmap_ext/colmap_commands.h"
 #include "colmap_ext/colmap_runner.h"
 #include "colmap_ext/database.h"
 #include "colmap_ext/masks.h"
@@ -23,6 +24,7 @@
 #include "src/core/log.h"
 #include "src/core/progress.h"
 #include "src/core/stamp.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/core/video.h"
 #include "src/core/workspace.h"
@@ -106,7 +108,12 @@ std::vector<fs::path> ListImages(const fs::path& dir) {
         kImageExtensions.count(entry.path().extension().string()))
       files.push_back(entry.path());
   }
-  std::sort(files.begin(), files.end());
+  // In the order people number files (frame_2 before frame_10): their
+  // time order.
+  std::sort(files.begin(), files.end(),
+            [](const fs::path& a, const fs::path& b) {
+              return NaturalLess(a.filename().string(), b.filename().string());
+            });
   if (files.empty())
     throw Error::In(dir.string(), "holds no .png or .jpg images");
   return files;
@@ -242,16 +249,34 @@ std::vector<std::string> WriteFrames(const SfmOptions& o,
       bar.Add(o.stride);
     }
   } else {
-    const std::vector<fs::path> files = ListImages(o.images);
-    ProgressBar bar("sfm: frames", files.size());
+    std::vector<fs::path> files;
+    for (const fs::path& f : ListImages(o.images)) files.push_back(f);
+    std::vector<fs::path> kept;
     for (std::size_t i = 0; i < files.size(); i += o.stride) {
-      if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
+      if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
         break;
-      const Image image = ReadImage(files[i]);
-      const std::string name = files[i].stem().string() + ".png";
+      kept.push_back(files[i]);
+    }
+    // COLMAP and pano4d's later stages order frames by name as bytes:
+    // names that do not sort in time order (frame_2, frame_10) get their
+    // position in front (000001_frame_2).
+    std::vector<std::string> stems;
+    for (const fs::path& f : kept) stems.push_back(f.stem().string());
+    const bool prefix = !std::is_sorted(stems.begin(), stems.end());
+    if (prefix) {
+      PANO4D_LOG(kInfo) << "sfm: the frames' names do not sort in their "
+                           "number order; numbered 000000_"
+                        << stems.front() << ".png on";
+    }
+    ProgressBar bar("sfm: frames", kept.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      const Image image = ReadImage(kept[i]);
+      const std::string name =
+          (prefix ? ZeroPadded(static_cast<std::int64_t>(i), 6) + "_" : "") +
+          stems[i] + ".png";
       WritePng8(images_dir / name, Resized(image.ToBgr8(), o.max_size));
       names.push_back(name);
-      bar.Add(o.stride);
+      bar.Add();
     }
   }
   if (names.size() < 2) {
@@ -295,16 +320,29 @@ int SelectLargestModel(const fs::path& sparse) {
   return static_cast<int>(largest->first);
 }
 
-// COLMAP's mapper settings for casual video, where consecutive frames see
-// little parallax and moving objects take features: the inlier counts an
-// initial pair and a registered frame need are relaxed (COLMAP's defaults:
-// 100, 30 and 0.25), the triangulation angles kept. On lady-running at
-// --max-size 160 the defaults posed 15 of 65 frames, these 65 (docs/
-// experiments/2026-12-03-casual-video-posing.md).
-std::vector<std::string> MapperArgs() {
-  return {"--Mapper.init_min_num_inliers",      "50",
-          "--Mapper.abs_pose_min_num_inliers",  "15",
-          "--Mapper.abs_pose_min_inlier_ratio", "0.15"};
+// sequential_matcher pairs each frame with the next ones in COLMAP's order
+// (SequentialMatcherOrder); frames out of time order there would be
+// matched with the wrong neighbours, and a video's reconstruction falls
+// apart. Throws pano4d::Error naming the first frame where the orders part.
+void CheckSequentialOrder(const fs::path& database,
+                          const std::vector<std::string>& time_order) {
+  const std::vector<std::string> colmap_order =
+      SequentialMatcherOrder(database);
+  std::vector<std::string> ours;
+  const std::set<std::string> in_database(colmap_order.begin(),
+                                          colmap_order.end());
+  for (const std::string& n : time_order)
+    if (in_database.count(n)) ours.push_back(n);
+  for (std::size_t i = 0; i < ours.size() && i < colmap_order.size(); ++i) {
+    if (ours[i] == colmap_order[i]) continue;
+    throw Error(database.string(), "images", colmap_order[i],
+                "sequential_matcher takes frames in name order, and there "
+                "frame " +
+                    std::to_string(i) + " is " + colmap_order[i] +
+                    " where the video has " + ours[i] +
+                    ": rename the frames with zero-padded numbers "
+                    "(frame_000002.png), or use --matcher exhaustive");
+  }
 }
 
 }  // namespace
@@ -426,6 +464,8 @@ SfmReport RunSfm(const SfmOptions& o) {
        [&] { WriteFrames(o, images_dir); });
   std::vector<fs::path> frames = ListImages(images_dir);
   report.frames = static_cast<int>(frames.size());
+  std::vector<std::string> frame_names;  // in time order
+  for (const fs::path& f : frames) frame_names.push_back(f.filename().string());
 
   // 2. Dynamic masks (COLMAP's convention in WS/masks, pano4d's in
   // WS/pano4d/tracks/dynamic).
@@ -479,46 +519,38 @@ SfmReport RunSfm(const SfmOptions& o) {
         {"known", !known.empty()}},
        exists(database), [&] {
          fs::remove(database);
-         std::vector<std::string> args = {"--database_path",
-                                          database.string(),
-                                          "--image_path",
-                                          images_dir.string(),
-                                          "--ImageReader.camera_model",
-                                          camera_model,
-                                          "--ImageReader.single_camera",
-                                          single_camera ? "1" : "0",
-                                          "--SiftExtraction.use_gpu",
-                                          "0"};
-         if (o.dynamic_masks) {
-           args.insert(args.end(),
-                       {"--ImageReader.mask_path", masks_dir.string()});
-         }
+         FeatureExtractorSettings settings;
+         settings.database = database;
+         settings.images = images_dir;
+         settings.camera_model = camera_model;
+         settings.single_camera = single_camera;
+         if (o.dynamic_masks) settings.masks = masks_dir;
          if (!known.empty()) {
-           // Database ids in our order; the known camera where it is shared.
+           // The known frames only (the database maps them by name); the
+           // known camera where it is shared.
            std::string list;
            for (const KnownFrame& f : known) list += f.name + "\n";
            WriteFileAtomically(image_list, list);
-           args.insert(args.end(), {"--image_list_path", image_list.string()});
+           settings.image_list = image_list;
            if (known_shared) {
-             std::string params;
              for (const double p : known.front().camera.camera.params) {
                char buffer[32];
                std::snprintf(buffer, sizeof(buffer), "%.17g", p);
-               if (!params.empty()) params += ',';
-               params += buffer;
+               if (!settings.camera_params.empty())
+                 settings.camera_params += ',';
+               settings.camera_params += buffer;
              }
-             args.insert(args.end(), {"--ImageReader.camera_params", params});
            }
          }
-         colmap.Run("feature_extractor", args, logs / "feature_extractor.log",
+         colmap.Run("feature_extractor", FeatureExtractorArgs(settings),
+                    logs / "feature_extractor.log",
                     "check that the frames are readable images");
        });
+  if (matcher == "sequential") CheckSequentialOrder(database, frame_names);
   step(matcher + "_matcher", {{"matcher", matcher}}, exists(database), [&] {
-    colmap.Run(
-        matcher + "_matcher",
-        {"--database_path", database.string(), "--SiftMatching.use_gpu", "0"},
-        logs / (matcher + "_matcher.log"),
-        "out of memory on many images: use --matcher sequential");
+    colmap.Run(matcher + "_matcher", MatcherArgs(database),
+               logs / (matcher + "_matcher.log"),
+               "out of memory on many images: use --matcher sequential");
   });
   if (!known.empty()) {
     step(
@@ -531,20 +563,16 @@ SfmReport RunSfm(const SfmOptions& o) {
           fs::remove_all(sparse);
           EnsureDirectory(sparse / "0");
           // The poses and intrinsics are given: only points are estimated.
-          colmap.Run("point_triangulator",
-                     {"--database_path", database.string(), "--image_path",
-                      images_dir.string(), "--input_path", input.string(),
-                      "--output_path", (sparse / "0").string(),
-                      "--Mapper.ba_refine_focal_length", "0",
-                      "--Mapper.ba_refine_principal_point", "0",
-                      "--Mapper.ba_refine_extra_params", "0"},
-                     logs / "point_triangulator.log",
-                     "too few matches between frames with known poses: lower "
-                     "--stride, or try --matcher exhaustive");
+          colmap.Run(
+              "point_triangulator",
+              PointTriangulatorArgs(database, images_dir, input, sparse / "0"),
+              logs / "point_triangulator.log",
+              "too few matches between frames with known poses: lower "
+              "--stride, or try --matcher exhaustive");
         });
   } else {
     step(
-        "mapper", {{"frames", report.frames}, {"options", MapperArgs()}},
+        "mapper", {{"frames", report.frames}, {"options", RelaxedMapperArgs()}},
         [&] { return DetectModelFormat(sparse / "0").has_value(); },
         [&] {
           fs::remove_all(sparse);
@@ -567,12 +595,8 @@ SfmReport RunSfm(const SfmOptions& o) {
                                    sparse / "0"))
             return;
           try {
-            std::vector<std::string> args = {
-                "--database_path",   database.string(), "--image_path",
-                images_dir.string(), "--output_path",   sparse.string()};
-            const std::vector<std::string> relaxed = MapperArgs();
-            args.insert(args.end(), relaxed.begin(), relaxed.end());
-            colmap.Run("mapper", args, logs / "mapper.log");
+            colmap.Run("mapper", MapperArgs(database, images_dir, sparse),
+                       logs / "mapper.log");
           } catch (const Error& e) {
             throw nothing_posed(e.problem());
           }
@@ -629,9 +653,7 @@ SfmReport RunSfm(const SfmOptions& o) {
         [&] {
           fs::remove_all(out);
           colmap.Run("image_undistorter",
-                     {"--image_path", images_dir.string(), "--input_path",
-                      report.model.string(), "--output_path", out.string(),
-                      "--output_type", "COLMAP"},
+                     ImageUndistorterArgs(images_dir, report.model, out),
                      logs / "image_undistorter.log",
                      "check free disk space in the workspace");
         });

@@ -140,7 +140,8 @@ ColmapModel ReadSfmModel(const Workspace& ws, fs::path* model_dir,
   return ReadModel(*model_dir);
 }
 
-// The frames of `pano4d sfm`'s model (undistorted, pinhole), in name order;
+// The frames of `pano4d sfm`'s model (undistorted, pinhole), in the order
+// people number files (NaturalLess, as sfm read them);
 // every holdout-th one (LLFF's convention: i % holdout == 0) validates.
 WorkspaceFrames FramesFromWorkspace(const Workspace& ws, const DepthOptions& o,
                                     ColmapModel* model) {
@@ -149,7 +150,7 @@ WorkspaceFrames FramesFromWorkspace(const Workspace& ws, const DepthOptions& o,
   std::vector<const ColmapImage*> sorted;
   for (const ColmapImage& image : model->images) sorted.push_back(&image);
   std::sort(sorted.begin(), sorted.end(),
-            [](auto* a, auto* b) { return a->name < b->name; });
+            [](auto* a, auto* b) { return NaturalLess(a->name, b->name); });
   WorkspaceFrames frames;
   frames.source = "colmap " + fs::absolute(model_dir).string();
   frames.num_times = static_cast<int>(sorted.size());

@@ -131,11 +131,12 @@ struct StageResult {
 };
 
 // What would stop a stage of the plan half way, checked before the first:
-// the colmap executable for sfm, the LPIPS weights for eval, a depth map per
-// training frame in --depth-dir (for a COLMAP model the frames are known
-// only after sfm; then only the folder is checked).
+// the colmap executable and its version for sfm, the LPIPS weights for eval, a
+// depth map per training frame in --depth-dir (for a COLMAP model the frames
+// are known only after sfm; then only the folder is checked).
 void CheckPlanCanRun(const RunOptions& o, const Plan& plan) {
-  if (plan.Runs("sfm")) ColmapRunner check(o.sfm.colmap);
+  if (plan.Runs("sfm"))
+    ColmapRunner(o.sfm.colmap).Version(Workspace(o.workspace).logs());
   if (plan.Runs("eval") && !o.lpips_weights.empty())
     Lpips::Load(o.lpips_weights);
   if (o.depth.depth_dir.empty()) return;

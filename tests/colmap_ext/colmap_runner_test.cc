@@ -17,10 +17,19 @@ namespace {
 namespace fs = std::filesystem;
 using testing::TempDir;
 
-// A stand-in for colmap: a shell script with the given body.
+// A stand-in for colmap: a shell script with the given body, which
+// answers `colmap help` and `colmap <command> -h` as COLMAP 3.8 taking
+// --a does.
 fs::path FakeColmap(const fs::path& dir, const std::string& body) {
   const fs::path path = dir / "colmap";
-  std::ofstream(path) << "#!/bin/sh\n" << body << "\n";
+  std::ofstream(path)
+      << "#!/bin/sh\n"
+      << "case \"$1 $2\" in\n"
+      << "  'help '*) echo 'COLMAP 3.8 -- Structure-from-Motion';"
+         " exit 0 ;;\n"
+      << "  *' -h') echo '  --a arg'; exit 0 ;;\n"
+      << "esac\n"
+      << body << "\n";
   fs::permissions(path, fs::perms::owner_all);
   return path;
 }

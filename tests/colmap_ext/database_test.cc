@@ -34,6 +34,25 @@ TEST(DatabaseTest, ReadsImageRowsInIdOrder) {
   EXPECT_EQ(images[2].camera_id, 7u);
 }
 
+TEST(DatabaseTest, TheSequentialMatcherOrderIsByNameNotById) {
+  testing::TempDir dir;
+  const auto path = dir / "database.db";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  // Ids as feature_extractor's threads may give them; names not padded.
+  ASSERT_EQ(sqlite3_exec(db,
+                         "CREATE TABLE images (image_id INTEGER PRIMARY KEY, "
+                         "name TEXT UNIQUE, camera_id INTEGER);"
+                         "INSERT INTO images VALUES (1, 'f2.png', 1);"
+                         "INSERT INTO images VALUES (2, 'f10.png', 1);"
+                         "INSERT INTO images VALUES (3, 'f1.png', 1);",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  EXPECT_EQ(SequentialMatcherOrder(path),
+            (std::vector<std::string>{"f1.png", "f10.png", "f2.png"}));
+}
+
 TEST(DatabaseTest, MissingOrForeignFilesAreErrorsNamingThem) {
   testing::TempDir dir;
   EXPECT_THROW(ReadDatabaseImages(dir / "none.db"), Error);

@@ -13,7 +13,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "colmap_ext/alignment.h"
+#include "colmap_ext/colmap_commands.h"
 #include "colmap_ext/colmap_runner.h"
+#include "colmap_ext/database.h"
 #include "colmap_ext/model.h"
 #include "colmap_ext/register_left_out.h"
 #include "src/core/error.h"
@@ -124,6 +126,87 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
+}
+
+// Frames numbered without padding (f1 ... f12 ...) keep their time order
+// through COLMAP: sfm numbers them so that name order, which
+// sequential_matcher pairs in, is time order; a workspace whose own images
+// are out of order is refused before matching, naming the frame.
+TEST_F(SfmTest, UnpaddedFrameNumbersKeepTheirTimeOrderThroughColmap) {
+  testing::TempDir& dir = *dir_;
+  const Dataset& dataset = *dataset_;
+  const fs::path unpadded = dir / "unpadded";
+  EnsureDirectory(unpadded);
+  for (std::size_t i = 0; i < dataset.train.size(); ++i)
+    fs::copy_file(dataset.train[i].rgb,
+                  unpadded / ("f" + std::to_string(i + 1) + ".png"));
+  ASSERT_GE(dataset.train.size(), 10u) << "needs f10 to sort before f2";
+  SfmOptions options;
+  options.images = unpadded;
+  options.workspace = dir / "ws_unpadded";
+  options.matcher = "sequential";
+  options.dynamic_masks = false;
+  const SfmReport report = RunSfm(options);
+  EXPECT_GE(report.registered, 0.9 * report.frames);
+  // COLMAP's order (names as bytes) is the frames' time order.
+  const std::vector<std::string> order =
+      SequentialMatcherOrder(options.workspace / "database.db");
+  ASSERT_EQ(order.size(), dataset.train.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    EXPECT_EQ(order[i],
+              ZeroPadded(i, 6) + "_f" + std::to_string(i + 1) + ".png");
+  }
+  // The same frames as a workspace's own images, unnumbered: refused.
+  const fs::path ws = dir / "ws_own_images";
+  EnsureDirectory(ws / "images");
+  for (std::size_t i = 0; i < 12; ++i)
+    fs::copy_file(dataset.train[i].rgb,
+                  ws / "images" / ("f" + std::to_string(i + 1) + ".png"));
+  SfmOptions own;
+  own.images = ws / "images";
+  own.workspace = ws;
+  own.matcher = "sequential";
+  own.dynamic_masks = false;
+  try {
+    RunSfm(own);
+    FAIL() << "frames out of time order were matched";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("f10.png"), std::string::npos) << what;
+    EXPECT_NE(what.find("--matcher exhaustive"), std::string::npos) << what;
+  }
+}
+
+// The installed COLMAP (Debian 12's 3.8 in CI) is detected, and takes
+// every command line sfm passes under their own names.
+TEST_F(SfmTest, TheInstalledColmapTakesEveryCommandLine) {
+  testing::TempDir logs;
+  const ColmapRunner colmap;
+  const ColmapVersion& v = colmap.Version(logs.path());
+  std::printf("installed COLMAP %s\n", v.text.c_str());
+  EXPECT_TRUE(CheckColmapVersion(v)) << v.text;
+  FeatureExtractorSettings s;
+  s.database = "db";
+  s.images = "images";
+  s.camera_model = "PINHOLE";
+  s.masks = "masks";
+  s.image_list = "list";
+  s.camera_params = "1,1,1,1";
+  const std::vector<std::pair<std::string, std::vector<std::string>>> lines = {
+      {"feature_extractor", FeatureExtractorArgs(s)},
+      {"exhaustive_matcher", MatcherArgs("db")},
+      {"sequential_matcher", MatcherArgs("db")},
+      {"mapper", MapperArgs("db", "images", "out")},
+      {"point_triangulator",
+       PointTriangulatorArgs("db", "images", "in", "out")},
+      {"image_undistorter", ImageUndistorterArgs("images", "in", "out")}};
+  for (const auto& [command, args] : lines) {
+    const std::vector<std::string> mapped =
+        colmap.MapArgs(command, args, logs.path());
+    EXPECT_EQ(mapped.size(), args.size()) << command;
+    if (!(v < ColmapVersion{3, 13, 0, "3.13"})) continue;
+    EXPECT_EQ(mapped, args) << command << ": 3.8 to 3.12 keep the 3.8 names";
+  }
 }
 
 // Frames taken out of the mapper's model come back by PnP against its
