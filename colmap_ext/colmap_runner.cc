@@ -28,13 +28,9 @@ std::string ColmapRunner::Help(const std::vector<std::string>& args,
   argv.insert(argv.end(), args.begin(), args.end());
   EnsureDirectory(log.parent_path());
   std::filesystem::remove(log);
-  const ProcessResult result = RunProcess(argv, log);
-  std::string command = "colmap";
-  for (const std::string& a : args) command += " " + a;
-  if (!result.ok()) {
-    throw Error("colmap", command, "",
-                "failed (" + result.How() + "); log: " + log.string());
-  }
+  // The exit status of a help request differs between versions; what it
+  // printed is what counts, and the callers check that.
+  RunProcess(argv, log);
   return ReadTextFile(log);
 }
 
@@ -68,7 +64,14 @@ std::vector<std::string> ColmapRunner::MapArgs(
   if (found == options_.end()) {
     const std::string help =
         Help({subcommand, "-h"}, log_dir / (subcommand + "_help.log"));
-    found = options_.emplace(subcommand, ParseColmapOptions(help)).first;
+    std::set<std::string> options = ParseColmapOptions(help);
+    if (options.empty()) {
+      throw Error("colmap " + version.text, subcommand, "",
+                  "`colmap " + subcommand + " -h` listed no options (log: " +
+                      (log_dir / (subcommand + "_help.log")).string() +
+                      "); is it a COLMAP command?");
+    }
+    found = options_.emplace(subcommand, std::move(options)).first;
   }
   std::vector<std::string> mapped;
   for (const std::string& a : args) {

@@ -19,8 +19,8 @@ namespace pano4d {
 struct LeftOutOptions {
   // The inliers a pose needs, in number and as a share of the frame's
   // 2D-3D correspondences: the mapper's own relaxed thresholds for casual
-  // video (colmap_commands.h's RelaxedMapperArgs), so that a frame is taken here on the
-  // evidence the mapper would have taken it on.
+  // video (colmap_commands.h's RelaxedMapperArgs), so that a frame is taken
+  // here on the evidence the mapper would have taken it on.
   int min_inliers = 15;
   double min_inlier_ratio = 0.15;
   // RANSAC's reprojection threshold, pixels. Tighter than the mapper's
