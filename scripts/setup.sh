@@ -24,6 +24,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
   colmap
   chromium  # the browser test of `pano4d view` (headless, software WebGL)
+  slurm-wlm munge  # the sweep test's single-node cluster (scripts/slurm_local.sh)
 )
 
 source scripts/apt.sh

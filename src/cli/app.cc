@@ -10,6 +10,7 @@
 
 #include "src/core/error.h"
 #include "src/core/log.h"
+#include "src/core/stop_signal.h"
 #include "src/core/version.h"
 
 namespace pano4d::cli {
@@ -61,6 +62,7 @@ int Main(int argc, char** argv) {
   AddRenderCommand(app, &action);
   AddExportCommand(app, &action);
   AddViewCommand(app, &action);
+  AddSweepCommand(app, &action);
 
   try {
     app.parse(argc, argv);
@@ -90,7 +92,7 @@ int Main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "pano4d: error: " << e.what() << "\n";
   }
-  return kExitError;
+  return StopRequested() ? kExitStopped : kExitError;
 }
 
 }  // namespace pano4d::cli

@@ -14,6 +14,9 @@ enum ExitCode : int {
   kExitOk = 0,
   kExitError = 1,   // bad input, a failed step: the message names the input
   kExitUsage = 64,  // unknown flag, missing argument (sysexits' EX_USAGE)
+  // Stopped on request (stop_signal.h) with its state saved: run the same
+  // command again (sysexits' EX_TEMPFAIL).
+  kExitStopped = 75,
 };
 
 // Parses argv, runs the chosen subcommand, and turns errors into one line on
@@ -43,5 +46,6 @@ void AddDemoCommand(CLI::App& app, Action* action);
 void AddRenderCommand(CLI::App& app, Action* action);
 void AddExportCommand(CLI::App& app, Action* action);
 void AddViewCommand(CLI::App& app, Action* action);
+void AddSweepCommand(CLI::App& app, Action* action);
 
 }  // namespace pano4d::cli

@@ -3,6 +3,7 @@
 #include <cstdlib>
 
 #include "src/cli/app.h"
+#include "src/core/stop_signal.h"
 
 namespace {
 
@@ -25,5 +26,6 @@ void ExecuteWithPassiveWaits(char** argv) {
 
 int main(int argc, char** argv) {
   ExecuteWithPassiveWaits(argv);
+  pano4d::InstallStopSignalHandler();
   return pano4d::cli::Main(argc, argv);
 }

@@ -17,6 +17,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "src/core/subprocess.h"
+
 namespace pano4d {
 
 struct BenchResult {
@@ -81,5 +83,35 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& options);
 // The benchmark suite a scene folder belongs to ("nvidia", "dycheck",
 // "kubric", "synth"), or empty when it is no dataset pano4d reads.
 std::string SuiteOf(const std::filesystem::path& scene);
+
+inline const std::vector<std::string> kBenchSuites = {"nvidia", "dycheck",
+                                                      "kubric", "synth"};
+
+// A scene folder of a benchmark root and its suite.
+struct BenchScene {
+  std::filesystem::path dir;
+  std::string suite;
+  std::string name() const { return dir.filename().string(); }
+};
+
+// The scene folders of `root` (by name) of `suite` (empty: every suite)
+// and, when `names` is not empty, only those. Throws pano4d::Error naming
+// the root for an unknown suite, a name without its folder, or no scene.
+std::vector<BenchScene> FindBenchScenes(const std::filesystem::path& root,
+                                        const std::string& suite,
+                                        const std::vector<std::string>& names);
+
+// `EXE run --dataset SCENE --workspace WS --eval --factor F
+// [--iterations N] [--lpips-weights W]`, at the scene's protocol factor
+// (Kubric-4D 1, the others 2), paths absolute. Throws pano4d::Error when
+// the scene cannot be read.
+std::vector<std::string> BenchRunCommand(
+    const std::filesystem::path& executable, const BenchScene& scene,
+    const std::filesystem::path& workspace, int iterations,
+    const std::filesystem::path& lpips_weights);
+
+// How a failed child run ended and the line of its log that says why.
+std::string RunFailure(const std::filesystem::path& log,
+                       const ProcessResult& result);
 
 }  // namespace pano4d

@@ -52,8 +52,9 @@ std::string KindOf(const std::string& suite) {
   return suite;
 }
 
-// The line of the log that says why the run failed.
-std::string ErrorOf(const fs::path& log, const ProcessResult& r) {
+}  // namespace
+
+std::string RunFailure(const fs::path& log, const ProcessResult& r) {
   std::istringstream lines(LastLines(log, 40));
   std::string line, error;
   while (std::getline(lines, line))
@@ -62,37 +63,48 @@ std::string ErrorOf(const fs::path& log, const ProcessResult& r) {
   return r.How() + ": " + error;
 }
 
+std::vector<std::string> BenchRunCommand(const fs::path& executable,
+                                         const BenchScene& scene,
+                                         const fs::path& workspace,
+                                         int iterations,
+                                         const fs::path& lpips_weights) {
+  // The protocol's factor, written out so that the command says it.
+  const int factor = LoadDataset(scene.dir, kProtocolFactor).factor;
+  std::vector<std::string> command = {executable.string(),
+                                      "run",
+                                      "--dataset",
+                                      fs::absolute(scene.dir).string(),
+                                      "--workspace",
+                                      fs::absolute(workspace).string(),
+                                      "--eval",
+                                      "--factor",
+                                      std::to_string(factor)};
+  if (iterations > 0) {
+    command.push_back("--iterations");
+    command.push_back(std::to_string(iterations));
+  }
+  if (!lpips_weights.empty()) {
+    command.push_back("--lpips-weights");
+    command.push_back(fs::absolute(lpips_weights).string());
+  }
+  return command;
+}
+
+namespace {
+
 Entry RunScene(const fs::path& dir, const std::string& suite,
                const BenchDatasetsOptions& o, const fs::path& executable) {
   Entry e;
   e.scene = dir.filename().string();
   e.suite = suite;
   const Workspace ws(o.workspace / e.scene);
-  // The protocol's factor, written out so that the entry says it.
-  int factor = kProtocolFactor;
   try {
-    factor = LoadDataset(dir, kProtocolFactor).factor;
+    e.command = BenchRunCommand(executable, {dir, suite}, ws.root(),
+                                o.iterations, o.lpips_weights);
   } catch (const Error& error) {
     e.status = "failed";
     e.error = error.what();
     return e;
-  }
-  e.command = {executable.string(),
-               "run",
-               "--dataset",
-               fs::absolute(dir).string(),
-               "--workspace",
-               fs::absolute(ws.root()).string(),
-               "--eval",
-               "--factor",
-               std::to_string(factor)};
-  if (o.iterations > 0) {
-    e.command.push_back("--iterations");
-    e.command.push_back(std::to_string(o.iterations));
-  }
-  if (!o.lpips_weights.empty()) {
-    e.command.push_back("--lpips-weights");
-    e.command.push_back(fs::absolute(o.lpips_weights).string());
   }
   const fs::path entry_file = ws.pano4d() / "bench_entry.json";
   nlohmann::json j;
@@ -119,7 +131,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   e.peak_memory_mib = r.peak_memory_mib;
   if (!r.ok()) {
     e.status = "failed";
-    e.error = ErrorOf(log, r);
+    e.error = RunFailure(log, r);
   } else {
     try {
       const nlohmann::json m = ReadJson(ws.metrics() / "metrics.json");
@@ -184,46 +196,50 @@ std::string SuiteOf(const fs::path& dir) {
   return "";
 }
 
-BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
-  if (!fs::is_directory(o.root))
-    throw Error::In(o.root.string(), "is not a folder of scenes (--root)");
-  const std::vector<std::string> suites = {"nvidia", "dycheck", "kubric",
-                                           "synth"};
-  if (!o.suite.empty() &&
-      std::find(suites.begin(), suites.end(), o.suite) == suites.end()) {
-    throw Error("--suite", "", o.suite, "use nvidia, dycheck, kubric or synth");
+std::vector<BenchScene> FindBenchScenes(const fs::path& root,
+                                        const std::string& suite,
+                                        const std::vector<std::string>& names) {
+  if (!fs::is_directory(root))
+    throw Error::In(root.string(), "is not a folder of scenes (--root)");
+  if (!suite.empty() && std::find(kBenchSuites.begin(), kBenchSuites.end(),
+                                  suite) == kBenchSuites.end()) {
+    throw Error("--suite", "", suite, "use nvidia, dycheck, kubric or synth");
   }
-  // The scenes, by folder name.
-  std::vector<std::pair<fs::path, std::string>> scenes;
+  std::vector<BenchScene> scenes;
   std::vector<fs::path> dirs;
-  for (const auto& entry : fs::directory_iterator(o.root))
+  for (const auto& entry : fs::directory_iterator(root))
     if (entry.is_directory()) dirs.push_back(entry.path());
   std::sort(dirs.begin(), dirs.end());
   for (const fs::path& dir : dirs) {
-    const std::string suite = SuiteOf(dir);
-    if (suite.empty() || (!o.suite.empty() && suite != o.suite)) continue;
+    const std::string found = SuiteOf(dir);
+    if (found.empty() || (!suite.empty() && found != suite)) continue;
     const std::string name = dir.filename().string();
-    if (!o.scenes.empty() &&
-        std::find(o.scenes.begin(), o.scenes.end(), name) == o.scenes.end())
+    if (!names.empty() &&
+        std::find(names.begin(), names.end(), name) == names.end())
       continue;
-    scenes.emplace_back(dir, suite);
+    scenes.push_back({dir, found});
   }
-  for (const std::string& wanted : o.scenes) {
-    if (std::none_of(scenes.begin(), scenes.end(), [&](const auto& s) {
-          return s.first.filename() == wanted;
+  for (const std::string& wanted : names) {
+    if (std::none_of(scenes.begin(), scenes.end(), [&](const BenchScene& s) {
+          return s.dir.filename() == wanted;
         })) {
-      throw Error(
-          o.root.string(), "--scenes", wanted,
-          "no scene folder of that name" +
-              (o.suite.empty() ? std::string() : " in suite " + o.suite));
+      throw Error(root.string(), "--scenes", wanted,
+                  "no scene folder of that name" +
+                      (suite.empty() ? std::string() : " in suite " + suite));
     }
   }
   if (scenes.empty()) {
-    throw Error::In(
-        o.root.string(),
-        "holds no scene folder pano4d reads" +
-            (o.suite.empty() ? std::string() : " of suite " + o.suite));
+    throw Error::In(root.string(),
+                    "holds no scene folder pano4d reads" +
+                        (suite.empty() ? std::string() : " of suite " + suite));
   }
+  return scenes;
+}
+
+BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
+  std::vector<std::pair<fs::path, std::string>> scenes;
+  for (const BenchScene& scene : FindBenchScenes(o.root, o.suite, o.scenes))
+    scenes.emplace_back(scene.dir, scene.suite);
   const fs::path executable =
       o.executable.empty() ? fs::read_symlink("/proc/self/exe") : o.executable;
   EnsureDirectory(o.workspace);
@@ -290,7 +306,7 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
         "that finished; a published mean is over its benchmark's scenes "
         "(datasets_meta/), which may be more.\n\n"
      << head;
-  for (const std::string& suite : suites) {
+  for (const std::string& suite : kBenchSuites) {
     std::vector<const Entry*> done;
     int total = 0;
     for (const Entry& e : entries) {

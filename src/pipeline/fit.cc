@@ -14,6 +14,7 @@
 #include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/core/run_recorder.h"
+#include "src/core/stop_signal.h"
 #include "src/core/timer.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory_io.h"
@@ -465,14 +466,22 @@ FitSummary FitController::Run() {
                         << " s reached at iteration " << it;
       break;
     }
-    if (stop_.load()) {
+    if (stop_.load() || StopRequested()) {
       summary.termination = FitTermination::kStopped;
       trainer.SaveCheckpoint(ckpt);
-      PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it;
+      PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it
+                        << (StopRequested() ? " on request (signal)" : "")
+                        << "; checkpoint " << ckpt.string();
       break;
     }
   }
   bar.Finish();
+  if (StopRequested()) {
+    // Stopped before a time limit: the checkpoint is what counts; the
+    // renders and summary come when the same command resumes.
+    summary.seconds.total = total.WallSeconds();
+    return summary;
+  }
   if (ex.expansion && !ex.expansion->cameras().empty()) {
     WriteTrajectories(ws.expansion(), ex.expansion->cameras(),
                       SourceCamerasOf(trainer.views()));

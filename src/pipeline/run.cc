@@ -17,6 +17,7 @@
 #include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/stamp.h"
+#include "src/core/stop_signal.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/datasets/dataset.h"
@@ -384,6 +385,13 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     f.resume = !mismatch;
     f.Check();
     const FitSummary r = FitController(ws, f, std::move(inputs)).Run();
+    if (StopRequested()) {
+      throw Error::In(
+          "fit", "stopped on request (signal " + std::to_string(StopSignal()) +
+                     "); its checkpoint " + ws.checkpoint().string() +
+                     " is kept: run the same command again to "
+                     "resume");
+    }
     if (progress) *progress << r.FullReport() << std::flush;
     return StageResult{"done", mismatch ? *mismatch : "resumed its checkpoint"};
   });

@@ -1,0 +1,456 @@
+#include "src/pipeline/sweep.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "evaluation/evaluate.h"
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/log.h"
+#include "src/core/progress.h"
+#include "src/core/stop_signal.h"
+#include "src/core/strings.h"
+#include "src/core/subprocess.h"
+#include "src/core/workspace.h"
+#include "src/pipeline/bench.h"
+#include "src/pipeline/eval.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kSweepFormat = "pano4d-sweep";
+// The nine metric columns of the evaluation tables.
+constexpr std::size_t kTableMetrics = 9;
+// `pano4d run`'s exit status when it stopped on request (cli/app.h).
+constexpr int kStoppedExit = 75;
+
+fs::path ThisExecutable(const fs::path& given) {
+  return given.empty() ? fs::read_symlink("/proc/self/exe") : given;
+}
+
+fs::path StatusPath(const fs::path& sweep, int index) {
+  return sweep / "status" / (std::to_string(index) + ".json");
+}
+
+Json ReadStatus(const fs::path& sweep, int index) {
+  const fs::path path = StatusPath(sweep, index);
+  if (!fs::exists(path)) return Json();
+  try {
+    return ReadJson(path);
+  } catch (const Error& e) {  // a torn write cannot happen; a hand edit can
+    PANO4D_LOG(kWarning) << "sweep: " << e.what();
+    return Json();
+  }
+}
+
+std::string Hostname() {
+  char name[256] = {};
+  gethostname(name, sizeof(name) - 1);
+  return name;
+}
+
+}  // namespace
+
+const std::map<std::string, std::vector<std::string>>& SweepConfigs() {
+  static const std::map<std::string, std::vector<std::string>> kConfigs = {
+      {"default", {}},
+      {"no-expansion", {"--no-expansion"}},
+      {"planar", {"--planar-expansion"}},
+      {"one-step", {"--one-step-expansion"}},
+      {"no-refinement", {"--no-gaussian-refinement"}},
+      {"no-motion", {"--no-motion"}},
+  };
+  return kConfigs;
+}
+
+Json PlanSweep(const SweepPlanOptions& o) {
+  if (o.seeds.empty()) throw Error("--seeds", "", "", "give at least one seed");
+  for (const std::string& c : o.configs) {
+    if (!SweepConfigs().count(c)) {
+      std::string known;
+      for (const auto& [name, flags] : SweepConfigs())
+        known += (known.empty() ? "" : ", ") + name;
+      throw Error("--configs", "", c, "is not a configuration; use " + known);
+    }
+  }
+  const std::vector<BenchScene> scenes =
+      FindBenchScenes(o.root, o.suite, o.scenes);
+  const fs::path executable = ThisExecutable(o.executable);
+  const fs::path out = fs::absolute(o.out);
+  Json entries = Json::array();
+  for (const BenchScene& scene : scenes) {
+    for (const std::string& config : o.configs) {
+      for (const int seed : o.seeds) {
+        const fs::path ws = out / "ws" / scene.name() /
+                            (config + "_seed" + std::to_string(seed));
+        std::vector<std::string> command = BenchRunCommand(
+            executable, scene, ws, o.iterations, o.lpips_weights);
+        command.insert(command.end(), {"--seed", std::to_string(seed)});
+        if (o.deterministic) command.push_back("--deterministic");
+        for (const std::string& flag : SweepConfigs().at(config))
+          command.push_back(flag);
+        entries.push_back({{"index", entries.size()},
+                           {"scene", scene.name()},
+                           {"suite", scene.suite},
+                           {"seed", seed},
+                           {"config", config},
+                           {"workspace", ws.string()},
+                           {"command", command}});
+      }
+    }
+  }
+  const Json manifest = {{"format", kSweepFormat},
+                         {"version", 1},
+                         {"root", fs::absolute(o.root).string()},
+                         {"suite", o.suite},
+                         {"seeds", o.seeds},
+                         {"configs", o.configs},
+                         {"executable", executable.string()},
+                         {"entries", entries}};
+  EnsureDirectory(out);
+  WriteJson(out / "manifest.json", manifest);
+  return manifest;
+}
+
+Json ReadSweepManifest(const fs::path& sweep) {
+  const fs::path path = sweep / "manifest.json";
+  if (!fs::exists(path)) {
+    throw Error::In(path.string(),
+                    "missing: make it with `pano4d sweep plan --out " +
+                        sweep.string() + "`");
+  }
+  const Json m = ReadJson(path);
+  if (GetJson<std::string>(m, "format", path.string()) != kSweepFormat)
+    throw Error(path.string(), "format", m["format"].dump(),
+                std::string("expected ") + kSweepFormat);
+  GetJson<Json>(m, "entries", path.string());
+  return m;
+}
+
+int SweepTaskIndex(int index, std::size_t entries) {
+  std::string from = "--index";
+  if (index < 0) {
+    for (const char* name : {"SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"}) {
+      const char* value = std::getenv(name);
+      if (value == nullptr || *value == '\0') continue;
+      char* end = nullptr;
+      const long v = std::strtol(value, &end, 10);
+      if (*end != '\0' || v < 0)
+        throw Error(std::string("$") + name, "", value, "is not an index");
+      index = static_cast<int>(v);
+      from = std::string("$") + name;
+      break;
+    }
+  }
+  if (index < 0) {
+    throw Error::In("sweep run",
+                    "no entry index: give --index I, or run as a Slurm "
+                    "array task ($SLURM_ARRAY_TASK_ID) or a Kubernetes "
+                    "Indexed Job ($JOB_COMPLETION_INDEX)");
+  }
+  if (static_cast<std::size_t>(index) >= entries) {
+    throw Error(from, "", std::to_string(index),
+                "the manifest has entries 0 to " +
+                    std::to_string(static_cast<long>(entries) - 1));
+  }
+  return index;
+}
+
+SweepOutcome RunSweepEntry(const fs::path& sweep, int index) {
+  const Json manifest = ReadSweepManifest(sweep);
+  const Json& entry = manifest["entries"].at(index);
+  const std::vector<std::string> command =
+      entry["command"].get<std::vector<std::string>>();
+  Json status = ReadStatus(sweep, index);
+  if (status.is_object() && status.value("status", "") == "done" &&
+      status.value("command", std::vector<std::string>{}) == command) {
+    PANO4D_LOG(kInfo) << "sweep: entry " << index << " finished earlier";
+    return SweepOutcome::kDoneEarlier;
+  }
+  const double earlier = status.is_object() ? status.value("seconds", 0.0) : 0;
+  const int attempts =
+      (status.is_object() ? status.value("attempts", 0) : 0) + 1;
+  status = {{"index", index},        {"scene", entry["scene"]},
+            {"seed", entry["seed"]}, {"config", entry["config"]},
+            {"command", command},    {"status", "running"},
+            {"host", Hostname()},    {"attempts", attempts},
+            {"seconds", earlier}};
+  if (const char* job = std::getenv("SLURM_JOB_ID")) status["slurm_job"] = job;
+  WriteJson(StatusPath(sweep, index), status);
+  const fs::path log = sweep / "logs" / (std::to_string(index) + ".log");
+  EnsureDirectory(log.parent_path());
+  PANO4D_LOG(kInfo) << "sweep: entry " << index << " (" << entry["scene"]
+                    << ", " << entry["config"] << ", seed " << entry["seed"]
+                    << "), log " << log.string();
+  const ProcessResult r = RunProcess(command, log);
+  status["seconds"] = earlier + r.seconds;
+  status["peak_memory_mib"] =
+      std::max(r.peak_memory_mib, status.value("peak_memory_mib", 0.0));
+  SweepOutcome outcome = SweepOutcome::kDone;
+  if (r.exit_code == kStoppedExit || (!r.ok() && StopRequested())) {
+    status["status"] = "stopped";
+    status["error"] = "stopped on request; the next attempt resumes it";
+    outcome = SweepOutcome::kStopped;
+  } else if (!r.ok()) {
+    status["status"] = "failed";
+    status["error"] = RunFailure(log, r);
+    outcome = SweepOutcome::kFailed;
+  } else {
+    const Workspace ws(entry["workspace"].get<std::string>());
+    try {
+      const Json m = ReadJson(ws.metrics_json());
+      status["metrics"] = GetJson<Json>(m, "mean", ws.metrics_json().string());
+      status["status"] = "done";
+      status["error"] = "";
+    } catch (const Error& e) {
+      status["status"] = "failed";
+      status["error"] = e.what();
+      outcome = SweepOutcome::kFailed;
+    }
+  }
+  WriteJson(StatusPath(sweep, index), status);
+  return outcome;
+}
+
+int RunSweepLocal(const fs::path& sweep, int jobs, const fs::path& exe) {
+  const Json manifest = ReadSweepManifest(sweep);
+  const int n = static_cast<int>(manifest["entries"].size());
+  const fs::path executable = ThisExecutable(exe);
+  std::atomic<int> next{0}, not_done{0};
+  ProgressBar bar("sweep local", n);
+  std::mutex bar_mutex;
+  std::vector<std::thread> workers;
+  for (int w = 0; w < std::max(1, jobs); ++w) {
+    workers.emplace_back([&] {
+      for (int i; (i = next++) < n;) {
+        const fs::path log =
+            sweep / "logs" / (std::to_string(i) + ".local.log");
+        EnsureDirectory(log.parent_path());
+        const ProcessResult r =
+            RunProcess({executable.string(), "sweep", "run", sweep.string(),
+                        "--index", std::to_string(i)},
+                       log);
+        if (!r.ok()) ++not_done;
+        const std::lock_guard<std::mutex> lock(bar_mutex);
+        bar.Add();
+      }
+    });
+  }
+  for (std::thread& t : workers) t.join();
+  bar.Finish();
+  return not_done;
+}
+
+fs::path WriteSbatchScript(const fs::path& sweep, const SbatchOptions& o) {
+  const Json manifest = ReadSweepManifest(sweep);
+  const std::size_t n = manifest["entries"].size();
+  const fs::path dir = fs::absolute(sweep);
+  const fs::path executable = ThisExecutable(o.executable);
+  std::ostringstream s;
+  s << "#!/bin/bash\n"
+    << "# pano4d sweep: one array task per manifest entry (" << n
+    << " entries). Each task runs `pano4d sweep run`, which skips an entry\n"
+    << "# that finished and resumes one that was stopped; SIGUSR1 before the\n"
+    << "# time limit lets the running fit checkpoint (exit 75), and the task\n"
+    << "# is requeued.\n"
+    << "#SBATCH --job-name=pano4d-sweep\n"
+    << "#SBATCH --array=0-" << n - 1
+    << (o.max_parallel > 0 ? "%" + std::to_string(o.max_parallel) : "") << "\n"
+    << "#SBATCH --requeue\n"
+    << "#SBATCH --open-mode=append\n"
+    << "#SBATCH --output=" << (dir / "logs" / "slurm_%A_%a.out").string()
+    << "\n"
+    << "#SBATCH --signal=B:USR1@" << o.signal_seconds << "\n"
+    << "#SBATCH --cpus-per-task=" << o.cpus << "\n";
+  if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
+  if (!o.mem.empty()) s << "#SBATCH --mem=" << o.mem << "\n";
+  if (!o.time.empty()) s << "#SBATCH --time=" << o.time << "\n";
+  s << "export OMP_NUM_THREADS=${SLURM_CPUS_PER_TASK:-" << o.cpus << "}\n"
+    << "'" << executable.string() << "' sweep run '" << dir.string()
+    << "' --index \"$SLURM_ARRAY_TASK_ID\" &\n"
+    << "child=$!\n"
+    << "# The entry's pano4d run is the child's child: both hear the signal.\n"
+    << "trap 'pkill -USR1 -P \"$child\"; kill -USR1 \"$child\"' USR1\n"
+    << "wait \"$child\"; status=$?\n"
+    << "while kill -0 \"$child\" 2>/dev/null; do wait \"$child\"; "
+       "status=$?; done\n"
+    << "if [ \"$status\" -eq " << kStoppedExit << " ]; then\n"
+    << "  scontrol requeue \"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
+    << "fi\n"
+    << "exit \"$status\"\n";
+  const fs::path script = dir / "sweep.sbatch";
+  WriteFileAtomically(script, s.str());
+  fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
+  EnsureDirectory(dir / "logs");
+  return script;
+}
+
+std::string SubmitSbatch(const fs::path& script) {
+  const auto sbatch = FindOnPath("sbatch");
+  if (!sbatch) {
+    throw Error::In("sbatch",
+                    "not found on PATH: submit from a Slurm login node, or "
+                    "run `pano4d sweep local` here");
+  }
+  const fs::path log = script.parent_path() / "logs" / "sbatch.log";
+  const ProcessResult r =
+      RunProcess({sbatch->string(), "--parsable", script.string()}, log);
+  const std::string last = LastLines(log, 1);
+  if (!r.ok()) {
+    throw Error("sbatch", script.string(), "",
+                "failed (" + r.How() + "): " + last);
+  }
+  return last.substr(0, last.find_first_of(";\n"));
+}
+
+namespace {
+
+// Mean and population standard deviation of the defined values.
+std::string MeanSpread(const std::vector<std::optional<double>>& values,
+                       std::size_t key) {
+  double sum = 0, squares = 0;
+  int n = 0;
+  for (const auto& v : values)
+    if (v) sum += *v, squares += *v * *v, ++n;
+  if (n == 0 || n != static_cast<int>(values.size())) return "-";
+  const double mean = sum / n;
+  const double spread = std::sqrt(std::max(0.0, squares / n - mean * mean));
+  return StringPrintf(MetricFormat(key), mean) + " ± " +
+         StringPrintf(MetricFormat(key), spread);
+}
+
+std::string Cell(const std::optional<double>& v, std::size_t key) {
+  return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
+}
+
+}  // namespace
+
+SweepTable CollectSweep(const fs::path& sweep) {
+  const Json manifest = ReadSweepManifest(sweep);
+  SweepTable t;
+  std::ostringstream md, csv;
+  const std::string metric_head =
+      " PSNR | SSIM | LPIPS | mPSNR | mSSIM | mLPIPS | uPSNR | uSSIM | "
+      "uLPIPS |";
+  const std::string metric_rule = "---|---|---|---|---|---|---|---|---|";
+  md << "# pano4d sweep: " << fs::absolute(sweep).string() << "\n\n"
+     << "## Entries\n\n| # | Scene | Config | Seed | Status |" << metric_head
+     << " Seconds | Peak MiB |\n|---|---|---|---|---|" << metric_rule
+     << "---|---|\n";
+  csv << "index,scene,suite,config,seed,status,error";
+  for (const char* key : kMetricKeys) csv << "," << key;
+  csv << ",seconds,peak_memory_mib,attempts\n";
+  // Per scene and configuration, the finished entries' rows.
+  std::map<std::pair<std::string, std::string>, std::vector<MetricRow>> done;
+  std::map<std::pair<std::string, std::string>, std::vector<double>> seconds;
+  std::map<std::pair<std::string, std::string>, int> planned;
+  std::map<std::string, std::string> suite_of;
+  std::vector<std::pair<std::string, std::string>> order;
+  for (const Json& e : manifest["entries"]) {
+    ++t.entries;
+    const int index = e["index"].get<int>();
+    const std::string scene = e["scene"], config = e["config"];
+    suite_of[scene] = e["suite"];
+    const auto key = std::make_pair(scene, config);
+    if (!planned.count(key)) order.push_back(key);
+    ++planned[key];
+    const Json s = ReadStatus(sweep, index);
+    const std::string status =
+        s.is_object() ? s.value("status", "missing") : "missing";
+    const std::string error = s.is_object() ? s.value("error", "") : "";
+    const MetricRow values = s.is_object() && s.contains("metrics")
+                                 ? MetricRowFromJson(s["metrics"])
+                                 : MetricRow{};
+    const double secs = s.is_object() ? s.value("seconds", 0.0) : 0.0;
+    const double memory = s.is_object() ? s.value("peak_memory_mib", 0.0) : 0;
+    if (status == "done") {
+      ++t.done;
+      done[key].push_back(values);
+      seconds[key].push_back(secs);
+    } else {
+      status == "missing" ? ++t.missing : ++t.failed;
+      t.problems.push_back(
+          StringPrintf("%d %s %s seed %d: %s%s", index, scene.c_str(),
+                       config.c_str(), e["seed"].get<int>(), status.c_str(),
+                       error.empty() ? "" : (": " + error).c_str()));
+    }
+    md << "| " << index << " | " << scene << " | " << config << " | "
+       << e["seed"].get<int>() << " | " << status << " |";
+    for (std::size_t k = 0; k < kTableMetrics; ++k)
+      md << " " << Cell(values[k], k) << " |";
+    md << " " << StringPrintf("%.0f", secs) << " | "
+       << StringPrintf("%.0f", memory) << " |\n";
+    std::string quoted = error;
+    std::replace(quoted.begin(), quoted.end(), '"', '\'');
+    std::replace(quoted.begin(), quoted.end(), '\n', ' ');
+    csv << index << "," << scene << "," << e["suite"].get<std::string>() << ","
+        << config << "," << e["seed"].get<int>() << "," << status << ",\""
+        << quoted << "\"";
+    for (std::size_t k = 0; k < kNumMetrics; ++k)
+      csv << "," << (values[k] ? StringPrintf("%.6f", *values[k]) : "");
+    csv << "," << StringPrintf("%.1f", secs) << ","
+        << StringPrintf("%.0f", memory) << ","
+        << (s.is_object() ? s.value("attempts", 0) : 0) << "\n";
+  }
+
+  md << "\n## Per scene and configuration\n\nMean ± spread (population "
+        "standard deviation) over the seeds that finished; seconds per "
+        "entry. Published rows follow each scene.\n\n"
+     << "| Scene | Config | Seeds |" << metric_head
+     << " Seconds |\n|---|---|---|" << metric_rule << "---|\n";
+  std::map<std::string, Json> benchmarks;
+  std::string last_scene;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto& key = order[i];
+    const std::vector<MetricRow>& rows = done[key];
+    md << "| " << key.first << " | " << key.second << " | " << rows.size()
+       << " of " << planned[key] << " |";
+    for (std::size_t k = 0; k < kTableMetrics; ++k) {
+      std::vector<std::optional<double>> values;
+      for (const MetricRow& r : rows) values.push_back(r[k]);
+      md << " " << MeanSpread(values, k) << " |";
+    }
+    double s = 0;
+    for (const double v : seconds[key]) s += v;
+    md << " "
+       << (rows.empty() ? std::string("-")
+                        : StringPrintf("%.0f", s / seconds[key].size()))
+       << " |\n";
+    // After a scene's last configuration, its published rows.
+    const bool scene_ends =
+        i + 1 == order.size() || order[i + 1].first != key.first;
+    if (!scene_ends) continue;
+    const std::string suite = suite_of[key.first];
+    const std::string kind = suite == "kubric"  ? "kubric4d"
+                             : suite == "synth" ? ""
+                                                : suite;
+    if (!benchmarks.count(suite))
+      benchmarks[suite] =
+          kind.empty() ? Json() : BenchmarkMeta(DatasetsMetaDir(), kind);
+    for (const PublishedRow& p : PublishedRows(benchmarks[suite], key.first)) {
+      if (p.mean) continue;
+      md << "| " << key.first << " | " << p.method << " (" << p.source
+         << ") | |";
+      for (std::size_t k = 0; k < kTableMetrics; ++k)
+        md << " " << Cell(p.values[k], k) << " |";
+      md << " |\n";
+    }
+  }
+  md << "\n## Not done\n\n";
+  if (t.problems.empty()) md << "Every entry finished.\n";
+  for (const std::string& p : t.problems) md << "- " << p << "\n";
+  WriteFileAtomically(sweep / "sweep.md", md.str());
+  WriteFileAtomically(sweep / "sweep.csv", csv.str());
+  t.markdown = md.str();
+  return t;
+}
+
+}  // namespace pano4d

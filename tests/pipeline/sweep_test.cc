@@ -1,0 +1,173 @@
+// `pano4d sweep` as a lab runs it, without a cluster: plan, run one entry
+// by index (also from $SLURM_ARRAY_TASK_ID), local, collect with a failing
+// entry, the batch script. The real Slurm test is sweep_slurm_test.cc.
+#include "src/pipeline/sweep.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.h"
+#include "src/core/file.h"
+#include "src/core/json.h"
+#include "tests/support/test_files.h"
+
+namespace pano4d {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunLogged;
+using testing::RunPano4d;
+using testing::Slurp;
+
+const std::string kPano4d = std::string(PANO4D_BINARY_DIR) + "/pano4d";
+
+class SweepTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    ASSERT_EQ(RunPano4d("synth --preset tiny --seed 3 --out '" +
+                            (dir_->path() / "root" / "tiny").string() + "'",
+                        dir_->path() / "synth.log"),
+              0)
+        << Slurp(dir_->path() / "synth.log");
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static testing::TempDir* dir_;
+};
+testing::TempDir* SweepTest::dir_ = nullptr;
+
+TEST_F(SweepTest, PlanRunLocalCollectWithAFailingEntry) {
+  const fs::path sweep = dir_->path() / "sweep";
+  const fs::path log = dir_->path() / "sweep.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --seeds 0,1 --configs default,no-expansion "
+                          "--iterations 40 --deterministic --out '" +
+                          sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const Json manifest = ReadJson(sweep / "manifest.json");
+  ASSERT_EQ(manifest["entries"].size(), 4u);
+  for (const Json& e : manifest["entries"]) {
+    const auto command = e["command"].get<std::vector<std::string>>();
+    EXPECT_NE(std::find(command.begin(), command.end(), "--seed"),
+              command.end());
+    EXPECT_EQ(std::find(command.begin(), command.end(), "--no-expansion") !=
+                  command.end(),
+              e["config"] == "no-expansion");
+  }
+  // Entry 1 from the array task's index; a second run does nothing.
+  ASSERT_EQ(RunLogged("SLURM_ARRAY_TASK_ID=1 " + kPano4d + " sweep run '" +
+                          sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  Json status = ReadJson(sweep / "status" / "1.json");
+  EXPECT_EQ(status["status"], "done");
+  EXPECT_EQ(status["attempts"], 1);
+  EXPECT_GT(status["peak_memory_mib"].get<double>(), 0.0);
+  ASSERT_EQ(RunPano4d("sweep run '" + sweep.string() + "' --index 1", log), 0);
+  EXPECT_NE(Slurp(log).find("finished earlier"), std::string::npos)
+      << Slurp(log);
+  EXPECT_EQ(ReadJson(sweep / "status" / "1.json")["attempts"], 1);
+  // Entry 2's workspace is made unusable: its run fails.
+  const fs::path ws2 = manifest["entries"][2]["workspace"].get<std::string>();
+  fs::create_directories(ws2.parent_path());
+  testing::WriteText(ws2, "a file where the workspace folder should be");
+  EXPECT_EQ(RunPano4d("sweep local '" + sweep.string() + "' --jobs 2", log), 1)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0)
+      << Slurp(log);
+  const std::string md = Slurp(sweep / "sweep.md");
+  const std::string csv = Slurp(sweep / "sweep.csv");
+  EXPECT_NE(Slurp(log).find("4 entries, 3 done, 1 failed"), std::string::npos)
+      << Slurp(log);
+  // The failure is listed with its error, and its row stays in the table.
+  EXPECT_NE(md.find("## Not done"), std::string::npos);
+  EXPECT_NE(md.find("2 tiny no-expansion seed 0: failed"), std::string::npos)
+      << md;
+  EXPECT_NE(csv.find(",failed,"), std::string::npos) << csv;
+  EXPECT_NE(md.find("| tiny | default | 2 of 2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| tiny | no-expansion | 1 of 2 |"), std::string::npos)
+      << md;
+}
+
+TEST_F(SweepTest, TheBatchScriptIsAnArrayThatRequeuesOnTheStopSignal) {
+  const fs::path sweep = dir_->path() / "sweep_sbatch";
+  const fs::path log = dir_->path() / "sbatch.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --seeds 0,1,2 --configs default,planar --out '" +
+                          sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep sbatch '" + sweep.string() +
+                          "' --partition cpu --cpus 4 --mem 8G --time 01:00:00 "
+                          "--max-parallel 3",
+                      log),
+            0)
+      << Slurp(log);
+  const std::string script = Slurp(sweep / "sweep.sbatch");
+  for (const char* line :
+       {"#SBATCH --array=0-5%3", "#SBATCH --requeue",
+        "#SBATCH --signal=B:USR1@", "#SBATCH --partition=cpu",
+        "#SBATCH --cpus-per-task=4", "#SBATCH --mem=8G",
+        "#SBATCH --time=01:00:00", "scontrol requeue", "sweep run"})
+    EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
+  // bash reads it.
+  EXPECT_EQ(
+      RunLogged("bash -n '" + (sweep / "sweep.sbatch").string() + "'", log), 0)
+      << Slurp(log);
+}
+
+// SIGUSR1 (a scheduler's warning before the time limit): the fit saves
+// its checkpoint and run exits 75; the same command resumes it.
+TEST_F(SweepTest, TheStopSignalCheckpointsAndTheRerunResumes) {
+  const fs::path ws = dir_->path() / "ws_signal";
+  const fs::path log = dir_->path() / "signal.log";
+  const std::string run =
+      kPano4d + " run --dataset '" + (dir_->path() / "root" / "tiny").string() +
+      "' --workspace '" + ws.string() + "' --iterations 20000";
+  ASSERT_EQ(RunLogged("(" + run +
+                          " & pid=$!; sleep 3; kill -USR1 $pid; "
+                          "wait $pid; exit $?)",
+                      log),
+            75)
+      << Slurp(log);
+  EXPECT_NE(Slurp(log).find("stopped on request"), std::string::npos)
+      << Slurp(log);
+  EXPECT_TRUE(fs::exists(ws / "pano4d/checkpoints/fit.ckpt"));
+  EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+  // The same command goes on from the checkpoint (stopped again here, to
+  // keep the test short).
+  ASSERT_EQ(RunLogged("(" + run +
+                          " & pid=$!; sleep 3; kill -USR1 $pid; "
+                          "wait $pid; exit $?)",
+                      log),
+            75)
+      << Slurp(log);
+  EXPECT_NE(Slurp(log).find("fit: resumed from"), std::string::npos)
+      << Slurp(log);
+}
+
+TEST_F(SweepTest, BadRequestsNameWhatIsWrong) {
+  const fs::path log = dir_->path() / "bad.log";
+  EXPECT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --configs default,fancy --out '" +
+                          (dir_->path() / "bad").string() + "'",
+                      log),
+            1);
+  EXPECT_NE(Slurp(log).find("fancy"), std::string::npos) << Slurp(log);
+  EXPECT_NE(Slurp(log).find("no-expansion"), std::string::npos) << Slurp(log);
+  EXPECT_THROW(SweepTaskIndex(-1, 4), Error);  // no index, no array task
+  EXPECT_THROW(SweepTaskIndex(4, 4), Error);
+  EXPECT_EQ(SweepTaskIndex(3, 4), 3);
+  setenv("JOB_COMPLETION_INDEX", "2", 1);
+  EXPECT_EQ(SweepTaskIndex(-1, 4), 2);
+  unsetenv("JOB_COMPLETION_INDEX");
+}
+
+}  // namespace
+}  // namespace pano4d
