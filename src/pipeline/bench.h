@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "evaluation/evaluate.h"
 #include "src/core/subprocess.h"
 
 namespace pano4d {
@@ -109,6 +110,17 @@ std::vector<std::string> BenchRunCommand(
     const std::filesystem::path& executable, const BenchScene& scene,
     const std::filesystem::path& workspace, int iterations,
     const std::filesystem::path& lpips_weights);
+
+// bench datasets' table, which sweep collect writes too: its head, and a
+// row (the nine metric columns, seconds and peak memory as given).
+inline constexpr const char* kBenchTableHead =
+    "| Scene | Suite | Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | "
+    "mLPIPS | uPSNR | uSSIM | uLPIPS | Seconds | Peak MiB |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+std::string BenchMarkdownRow(const std::string& scene, const std::string& suite,
+                             const std::string& method, const MetricRow& values,
+                             const std::string& seconds,
+                             const std::string& memory);
 
 // How a failed child run ended and the line of its log that says why.
 std::string RunFailure(const std::filesystem::path& log,

@@ -151,15 +151,6 @@ std::string Cell(const std::optional<double>& v, std::size_t key) {
   return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
 }
 
-std::string MarkdownRow(const std::string& scene, const std::string& suite,
-                        const std::string& method, const MetricRow& values,
-                        const std::string& seconds, const std::string& memory) {
-  std::string row = "| " + scene + " | " + suite + " | " + method + " |";
-  for (std::size_t k = 0; k < kTableMetrics; ++k)
-    row += " " + Cell(values[k], k) + " |";
-  return row + " " + seconds + " | " + memory + " |\n";
-}
-
 std::string CsvField(std::string s) {
   std::replace(s.begin(), s.end(), '\n', ' ');
   if (s.find_first_of(",\"") == std::string::npos) return s;
@@ -194,6 +185,16 @@ std::string SuiteOf(const fs::path& dir) {
   if (LooksLikeNvidia(dir)) return "nvidia";
   if (LooksLikeKubric4D(dir)) return "kubric";
   return "";
+}
+
+std::string BenchMarkdownRow(const std::string& scene, const std::string& suite,
+                             const std::string& method, const MetricRow& values,
+                             const std::string& seconds,
+                             const std::string& memory) {
+  std::string row = "| " + scene + " | " + suite + " | " + method + " |";
+  for (std::size_t k = 0; k < kTableMetrics; ++k)
+    row += " " + Cell(values[k], k) + " |";
+  return row + " " + seconds + " | " + memory + " |\n";
 }
 
 std::vector<BenchScene> FindBenchScenes(const fs::path& root,
@@ -267,10 +268,7 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
                           : std::string(", the default schedule"))
      << "; seconds and peak memory of that run. Published rows follow each "
         "scene where a source gives per-scene numbers.\n\n";
-  const std::string head =
-      "| Scene | Suite | Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | "
-      "mLPIPS | uPSNR | uSSIM | uLPIPS | Seconds | Peak MiB |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  const std::string head = kBenchTableHead;
   md << head;
   csv << "scene,suite,method,source,status,error";
   for (const char* key : kMetricKeys) csv << "," << key;
@@ -284,7 +282,7 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
                                 : BenchmarkMeta(DatasetsMetaDir(), kind);
     const std::string seconds = StringPrintf("%.0f", e.seconds);
     const std::string memory = StringPrintf("%.0f", e.peak_memory_mib);
-    md << MarkdownRow(
+    md << BenchMarkdownRow(
         e.scene, e.suite,
         e.status == "done" ? "pano4d" : "pano4d: " + e.status + ": " + e.error,
         e.values, seconds, memory);
@@ -292,8 +290,8 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
                   e.values, seconds, memory);
     for (const PublishedRow& p : PublishedRows(benchmarks[e.suite], e.scene)) {
       if (p.mean) continue;
-      md << MarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
-                        p.values, "", "");
+      md << BenchMarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
+                             p.values, "", "");
       csv << CsvRow(e.scene, e.suite, p.method, p.source, "published", "",
                     p.values, "", "");
     }
@@ -333,12 +331,12 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
     const std::string s =
         done.empty() ? "" : StringPrintf("%.0f", seconds / done.size());
     const std::string m = done.empty() ? "" : StringPrintf("%.0f", memory);
-    md << MarkdownRow("mean", suite, "pano4d, " + label, mean, s, m);
+    md << BenchMarkdownRow("mean", suite, "pano4d, " + label, mean, s, m);
     csv << CsvRow("mean", suite, "pano4d", label, "mean", "", mean, s, m);
     for (const PublishedRow& p : PublishedRows(benchmarks[suite], "")) {
       if (!p.mean) continue;
-      md << MarkdownRow("mean", suite, p.method + " (" + p.source + ")",
-                        p.values, "", "");
+      md << BenchMarkdownRow("mean", suite, p.method + " (" + p.source + ")",
+                             p.values, "", "");
       csv << CsvRow("mean", suite, p.method, p.source, "published", "",
                     p.values, "", "");
     }

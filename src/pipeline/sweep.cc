@@ -63,7 +63,10 @@ const std::map<std::string, std::vector<std::string>>& SweepConfigs() {
   static const std::map<std::string, std::vector<std::string>> kConfigs = {
       {"default", {}},
       {"no-expansion", {"--no-expansion"}},
-      {"planar", {"--planar-expansion"}},
+      // The planar ablation moves cameras by tan(angle): 6 steps of 14.8
+      // degrees keep the total below its 89 (as in docs/experiments/
+      // 2026-11-22-expansion-ablation-2000.md).
+      {"planar", {"--planar-expansion", "--alpha", "14.8"}},
       {"one-step", {"--one-step-expansion"}},
       {"no-refinement", {"--no-gaussian-refinement"}},
       {"no-motion", {"--no-motion"}},
@@ -313,20 +316,6 @@ std::string SubmitSbatch(const fs::path& script) {
 
 namespace {
 
-// Mean and population standard deviation of the defined values.
-std::string MeanSpread(const std::vector<std::optional<double>>& values,
-                       std::size_t key) {
-  double sum = 0, squares = 0;
-  int n = 0;
-  for (const auto& v : values)
-    if (v) sum += *v, squares += *v * *v, ++n;
-  if (n == 0 || n != static_cast<int>(values.size())) return "-";
-  const double mean = sum / n;
-  const double spread = std::sqrt(std::max(0.0, squares / n - mean * mean));
-  return StringPrintf(MetricFormat(key), mean) + " ± " +
-         StringPrintf(MetricFormat(key), spread);
-}
-
 std::string Cell(const std::optional<double>& v, std::size_t key) {
   return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
 }
@@ -350,7 +339,8 @@ SweepTable CollectSweep(const fs::path& sweep) {
   csv << ",seconds,peak_memory_mib,attempts\n";
   // Per scene and configuration, the finished entries' rows.
   std::map<std::pair<std::string, std::string>, std::vector<MetricRow>> done;
-  std::map<std::pair<std::string, std::string>, std::vector<double>> seconds;
+  std::map<std::pair<std::string, std::string>, std::vector<double>> seconds,
+      memory_of;
   std::map<std::pair<std::string, std::string>, int> planned;
   std::map<std::string, std::string> suite_of;
   std::vector<std::pair<std::string, std::string>> order;
@@ -375,6 +365,7 @@ SweepTable CollectSweep(const fs::path& sweep) {
       ++t.done;
       done[key].push_back(values);
       seconds[key].push_back(secs);
+      memory_of[key].push_back(memory);
     } else {
       status == "missing" ? ++t.missing : ++t.failed;
       t.problems.push_back(
@@ -401,34 +392,46 @@ SweepTable CollectSweep(const fs::path& sweep) {
         << (s.is_object() ? s.value("attempts", 0) : 0) << "\n";
   }
 
-  md << "\n## Per scene and configuration\n\nMean ± spread (population "
-        "standard deviation) over the seeds that finished; seconds per "
-        "entry. Published rows follow each scene.\n\n"
-     << "| Scene | Config | Seeds |" << metric_head
-     << " Seconds |\n|---|---|---|" << metric_rule << "---|\n";
+  // Per scene and configuration, bench datasets' table: the mean over the
+  // seeds that finished, their spread (population standard deviation),
+  // then the scene's published rows.
+  md << "\n## Per scene and configuration\n\nbench datasets' table: per "
+        "configuration the mean over the seeds that finished and their "
+        "spread (population standard deviation); seconds per entry, the "
+        "largest peak memory. Published rows follow each scene.\n\n"
+     << kBenchTableHead;
   std::map<std::string, Json> benchmarks;
-  std::string last_scene;
   for (std::size_t i = 0; i < order.size(); ++i) {
     const auto& key = order[i];
+    const std::string& suite = suite_of[key.first];
     const std::vector<MetricRow>& rows = done[key];
-    md << "| " << key.first << " | " << key.second << " | " << rows.size()
-       << " of " << planned[key] << " |";
-    for (std::size_t k = 0; k < kTableMetrics; ++k) {
-      std::vector<std::optional<double>> values;
-      for (const MetricRow& r : rows) values.push_back(r[k]);
-      md << " " << MeanSpread(values, k) << " |";
+    MetricRow mean, spread;
+    for (std::size_t k = 0; k < kNumMetrics && !rows.empty(); ++k) {
+      double sum = 0, squares = 0;
+      bool all = true;
+      for (const MetricRow& r : rows) {
+        if (!r[k]) all = false;
+        if (r[k]) sum += *r[k], squares += *r[k] * *r[k];
+      }
+      if (!all) continue;
+      mean[k] = sum / rows.size();
+      spread[k] =
+          std::sqrt(std::max(0.0, squares / rows.size() - *mean[k] * *mean[k]));
     }
-    double s = 0;
-    for (const double v : seconds[key]) s += v;
-    md << " "
-       << (rows.empty() ? std::string("-")
-                        : StringPrintf("%.0f", s / seconds[key].size()))
-       << " |\n";
+    double secs = 0, memory = 0;
+    for (const double v : seconds[key]) secs += v;
+    for (const double v : memory_of[key]) memory = std::max(memory, v);
+    const std::string label =
+        StringPrintf("pano4d %s, mean of %zu of %d seeds", key.second.c_str(),
+                     rows.size(), planned[key]);
+    md << BenchMarkdownRow(
+        key.first, suite, label, mean,
+        rows.empty() ? "-" : StringPrintf("%.0f", secs / rows.size()),
+        rows.empty() ? "-" : StringPrintf("%.0f", memory));
+    md << BenchMarkdownRow(key.first, suite,
+                           "pano4d " + key.second + ", spread", spread, "", "");
     // After a scene's last configuration, its published rows.
-    const bool scene_ends =
-        i + 1 == order.size() || order[i + 1].first != key.first;
-    if (!scene_ends) continue;
-    const std::string suite = suite_of[key.first];
+    if (i + 1 < order.size() && order[i + 1].first == key.first) continue;
     const std::string kind = suite == "kubric"  ? "kubric4d"
                              : suite == "synth" ? ""
                                                 : suite;
@@ -437,11 +440,8 @@ SweepTable CollectSweep(const fs::path& sweep) {
           kind.empty() ? Json() : BenchmarkMeta(DatasetsMetaDir(), kind);
     for (const PublishedRow& p : PublishedRows(benchmarks[suite], key.first)) {
       if (p.mean) continue;
-      md << "| " << key.first << " | " << p.method << " (" << p.source
-         << ") | |";
-      for (std::size_t k = 0; k < kTableMetrics; ++k)
-        md << " " << Cell(p.values[k], k) << " |";
-      md << " |\n";
+      md << BenchMarkdownRow(key.first, suite, p.method + " (" + p.source + ")",
+                             p.values, "", "");
     }
   }
   md << "\n## Not done\n\n";

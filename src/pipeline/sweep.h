@@ -95,11 +95,11 @@ struct SweepTable {
   std::vector<std::string> problems;  // "<index> <scene> ...: <error>"
 };
 
-// Writes SWEEP/sweep.md and SWEEP/sweep.csv: one row per entry, then per
-// scene and configuration the mean and spread (population standard
-// deviation) over the seeds that finished and the mean seconds, beside
-// the published rows of the scene's benchmark; failed, stopped and missing
-// entries are listed with their errors, not dropped.
+// Writes SWEEP/sweep.md and SWEEP/sweep.csv: one row per entry, then bench
+// datasets' table with, per scene and configuration, the mean and the
+// spread (population standard deviation) over the seeds that finished,
+// beside the published rows of the scene's benchmark; failed, stopped and
+// missing entries are listed with their errors, not dropped.
 SweepTable CollectSweep(const std::filesystem::path& sweep);
 
 }  // namespace pano4d

@@ -89,9 +89,38 @@ TEST_F(SweepTest, PlanRunLocalCollectWithAFailingEntry) {
   EXPECT_NE(md.find("2 tiny no-expansion seed 0: failed"), std::string::npos)
       << md;
   EXPECT_NE(csv.find(",failed,"), std::string::npos) << csv;
-  EXPECT_NE(md.find("| tiny | default | 2 of 2 |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| tiny | no-expansion | 1 of 2 |"), std::string::npos)
+  EXPECT_NE(md.find("| tiny | synth | pano4d default, mean of 2 of 2 seeds |"),
+            std::string::npos)
       << md;
+  EXPECT_NE(
+      md.find("| tiny | synth | pano4d no-expansion, mean of 1 of 2 seeds |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| tiny | synth | pano4d default, spread |"),
+            std::string::npos)
+      << md;
+}
+
+// Every configuration's flags are ones `pano4d run` takes with its other
+// defaults.
+TEST_F(SweepTest, EveryConfigurationRuns) {
+  const fs::path sweep = dir_->path() / "sweep_configs";
+  const fs::path log = dir_->path() / "configs.log";
+  std::string configs;
+  for (const auto& [name, flags] : SweepConfigs())
+    configs += (configs.empty() ? "" : ",") + name;
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --configs " + configs +
+                          " --iterations 30 --out '" + sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  EXPECT_EQ(RunPano4d("sweep local '" + sweep.string() + "' --jobs 2", log), 0)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0);
+  EXPECT_NE(Slurp(sweep / "sweep.md").find("Every entry finished."),
+            std::string::npos)
+      << Slurp(sweep / "sweep.md");
 }
 
 TEST_F(SweepTest, TheBatchScriptIsAnArrayThatRequeuesOnTheStopSignal) {
