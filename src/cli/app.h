@@ -3,6 +3,8 @@
 #include <functional>
 #include <string>
 
+#include "src/core/stop_signal.h"
+
 namespace CLI {
 class App;
 }
@@ -16,7 +18,7 @@ enum ExitCode : int {
   kExitUsage = 64,  // unknown flag, missing argument (sysexits' EX_USAGE)
   // Stopped on request (stop_signal.h) with its state saved: run the same
   // command again (sysexits' EX_TEMPFAIL).
-  kExitStopped = 75,
+  kExitStopped = kStoppedExitStatus,
 };
 
 // Parses argv, runs the chosen subcommand, and turns errors into one line on

@@ -20,4 +20,9 @@ void InstallStopSignalHandler();
 bool StopRequested();
 void ClearStopRequest();
 
+// The exit status of a command that stopped on request with its state
+// saved (sysexits' EX_TEMPFAIL, "try again"): the batch script of `pano4d
+// sweep sbatch` requeues a task that ends with it.
+inline constexpr int kStoppedExitStatus = 75;
+
 }  // namespace pano4d

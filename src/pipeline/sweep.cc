@@ -29,8 +29,6 @@ namespace {
 constexpr const char* kSweepFormat = "pano4d-sweep";
 // The nine metric columns of the evaluation tables.
 constexpr std::size_t kTableMetrics = 9;
-// `pano4d run`'s exit status when it stopped on request (cli/app.h).
-constexpr int kStoppedExit = 75;
 
 fs::path ThisExecutable(const fs::path& given) {
   return given.empty() ? fs::read_symlink("/proc/self/exe") : given;
@@ -198,7 +196,7 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index) {
   status["peak_memory_mib"] =
       std::max(r.peak_memory_mib, status.value("peak_memory_mib", 0.0));
   SweepOutcome outcome = SweepOutcome::kDone;
-  if (r.exit_code == kStoppedExit || (!r.ok() && StopRequested())) {
+  if (r.exit_code == kStoppedExitStatus || (!r.ok() && StopRequested())) {
     status["status"] = "stopped";
     status["error"] = "stopped on request; the next attempt resumes it";
     outcome = SweepOutcome::kStopped;
@@ -285,7 +283,7 @@ fs::path WriteSbatchScript(const fs::path& sweep, const SbatchOptions& o) {
     << "wait \"$child\"; status=$?\n"
     << "while kill -0 \"$child\" 2>/dev/null; do wait \"$child\"; "
        "status=$?; done\n"
-    << "if [ \"$status\" -eq " << kStoppedExit << " ]; then\n"
+    << "if [ \"$status\" -eq " << kStoppedExitStatus << " ]; then\n"
     << "  scontrol requeue \"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
     << "fi\n"
     << "exit \"$status\"\n";
