@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,16 +112,21 @@ std::vector<std::string> BenchRunCommand(
     const std::filesystem::path& workspace, int iterations,
     const std::filesystem::path& lpips_weights);
 
-// bench datasets' table, which sweep collect writes too: its head, and a
-// row (the nine metric columns, seconds and peak memory as given).
+// bench datasets' table, which sweep collect writes too: its head, a
+// metric's cell ("-" without a value), a row (the nine metric columns,
+// seconds and peak memory as given), and the benchmark file of a suite
+// whose published rows go beside it (null for synth, which has none).
+inline constexpr std::size_t kBenchTableMetrics = 9;
 inline constexpr const char* kBenchTableHead =
     "| Scene | Suite | Method | PSNR | SSIM | LPIPS | mPSNR | mSSIM | "
     "mLPIPS | uPSNR | uSSIM | uLPIPS | Seconds | Peak MiB |\n"
     "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+std::string BenchCell(const std::optional<double>& value, std::size_t key);
 std::string BenchMarkdownRow(const std::string& scene, const std::string& suite,
                              const std::string& method, const MetricRow& values,
                              const std::string& seconds,
                              const std::string& memory);
+nlohmann::json SuiteBenchmarkMeta(const std::string& suite);
 
 // How a failed child run ended and the line of its log that says why.
 std::string RunFailure(const std::filesystem::path& log,

@@ -24,9 +24,6 @@ namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
 
-// The nine metric columns of the evaluation tables (kMetricKeys' first).
-constexpr std::size_t kTableMetrics = 9;
-
 struct Entry {
   std::string scene, suite;
   std::string status;  // "done" or "failed"
@@ -45,14 +42,14 @@ struct Entry {
   }
 };
 
-// The benchmark file's kind for a suite (synthetic scenes have none).
-std::string KindOf(const std::string& suite) {
-  if (suite == "kubric") return "kubric4d";
-  if (suite == "synth") return "";
-  return suite;
-}
-
 }  // namespace
+
+Json SuiteBenchmarkMeta(const std::string& suite) {
+  // The benchmark file's kind for a suite (synthetic scenes have none).
+  if (suite == "synth") return Json();
+  return BenchmarkMeta(DatasetsMetaDir(),
+                       suite == "kubric" ? "kubric4d" : suite);
+}
 
 std::string RunFailure(const fs::path& log, const ProcessResult& r) {
   std::istringstream lines(LastLines(log, 40));
@@ -147,10 +144,6 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   return e;
 }
 
-std::string Cell(const std::optional<double>& v, std::size_t key) {
-  return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
-}
-
 std::string CsvField(std::string s) {
   std::replace(s.begin(), s.end(), '\n', ' ');
   if (s.find_first_of(",\"") == std::string::npos) return s;
@@ -187,13 +180,17 @@ std::string SuiteOf(const fs::path& dir) {
   return "";
 }
 
+std::string BenchCell(const std::optional<double>& v, std::size_t key) {
+  return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
+}
+
 std::string BenchMarkdownRow(const std::string& scene, const std::string& suite,
                              const std::string& method, const MetricRow& values,
                              const std::string& seconds,
                              const std::string& memory) {
   std::string row = "| " + scene + " | " + suite + " | " + method + " |";
-  for (std::size_t k = 0; k < kTableMetrics; ++k)
-    row += " " + Cell(values[k], k) + " |";
+  for (std::size_t k = 0; k < kBenchTableMetrics; ++k)
+    row += " " + BenchCell(values[k], k) + " |";
   return row + " " + seconds + " | " + memory + " |\n";
 }
 
@@ -275,11 +272,8 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
   csv << ",seconds,peak_memory_mib\n";
   std::map<std::string, nlohmann::json> benchmarks;
   for (const Entry& e : entries) {
-    const std::string kind = KindOf(e.suite);
     if (!benchmarks.count(e.suite))
-      benchmarks[e.suite] = kind.empty()
-                                ? nlohmann::json()
-                                : BenchmarkMeta(DatasetsMetaDir(), kind);
+      benchmarks[e.suite] = SuiteBenchmarkMeta(e.suite);
     const std::string seconds = StringPrintf("%.0f", e.seconds);
     const std::string memory = StringPrintf("%.0f", e.peak_memory_mib);
     md << BenchMarkdownRow(

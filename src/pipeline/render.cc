@@ -170,16 +170,11 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
   std::vector<SourceCamera> sources;
   for (const WorkspaceFrame& f : fitted.frames.train)
     sources.push_back({f.name, RasterCamera::FromPosed(f.camera)});
-  const std::vector<ExpandedView> expanded =
-      fs::exists(ws.trajectories_json())
-          ? ReadTrajectories(ws.trajectories_json())
-          : std::vector<ExpandedView>{};
-  WriteTrajectories(summary.out, expanded, sources);
+  WriteTrajectories(summary.out, fitted.expanded, sources);
   summary.training_cameras = sources.size();
-  summary.expanded_cameras = expanded.size();
+  summary.expanded_cameras = fitted.expanded.size();
   // The compact 4D form, which `pano4d view`'s page loads.
-  summary.scene4d_bytes =
-      WriteScene4d(summary.out, scene, SceneExtras(fitted, expanded));
+  summary.scene4d_bytes = WriteScene4d(summary.out, scene, SceneExtras(fitted));
   for (const Json& f : files)
     summary.ply_bytes += fs::file_size(ply / f["file"].get<std::string>());
   return summary;

@@ -10,6 +10,7 @@
 #include "src/core/json.h"
 #include "src/gs/trainer.h"
 #include "src/pano/frame.h"
+#include "src/pano/trajectory_io.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -48,6 +49,8 @@ FittedWorkspace LoadFittedWorkspace(const Workspace& ws) {
   if (w.frames.train.empty()) {
     throw Error(ws.frames_json().string(), "train", "", "no training frames");
   }
+  if (fs::exists(ws.trajectories_json()))
+    w.expanded = ReadTrajectories(ws.trajectories_json());
   return w;
 }
 

@@ -19,6 +19,8 @@ namespace pano4d {
 struct FittedWorkspace {
   WorkspaceFrames frames;
   GaussianScene scene;
+  // The expansion's cameras (trajectories.json); empty when none ran.
+  std::vector<ExpandedView> expanded;
   // The training frame nearest the middle time: the reference of the
   // novel-view paths.
   const WorkspaceFrame& MiddleFrame() const;
@@ -26,7 +28,8 @@ struct FittedWorkspace {
   Eigen::Vector3d Center() const;
 };
 
-// frames.json and the checkpoint of `pano4d fit`; throws pano4d::Error
+// frames.json, the checkpoint of `pano4d fit` and its expanded cameras;
+// throws pano4d::Error
 // naming the missing file and the command that makes it.
 FittedWorkspace LoadFittedWorkspace(const Workspace& workspace);
 

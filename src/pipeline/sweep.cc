@@ -20,15 +20,12 @@
 #include "src/core/subprocess.h"
 #include "src/core/workspace.h"
 #include "src/pipeline/bench.h"
-#include "src/pipeline/eval.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kSweepFormat = "pano4d-sweep";
-// The nine metric columns of the evaluation tables.
-constexpr std::size_t kTableMetrics = 9;
 
 fs::path ThisExecutable(const fs::path& given) {
   return given.empty() ? fs::read_symlink("/proc/self/exe") : given;
@@ -312,14 +309,6 @@ std::string SubmitSbatch(const fs::path& script) {
   return last.substr(0, last.find_first_of(";\n"));
 }
 
-namespace {
-
-std::string Cell(const std::optional<double>& v, std::size_t key) {
-  return v ? StringPrintf(MetricFormat(key), *v) : std::string("-");
-}
-
-}  // namespace
-
 SweepTable CollectSweep(const fs::path& sweep) {
   const Json manifest = ReadSweepManifest(sweep);
   SweepTable t;
@@ -373,8 +362,8 @@ SweepTable CollectSweep(const fs::path& sweep) {
     }
     md << "| " << index << " | " << scene << " | " << config << " | "
        << e["seed"].get<int>() << " | " << status << " |";
-    for (std::size_t k = 0; k < kTableMetrics; ++k)
-      md << " " << Cell(values[k], k) << " |";
+    for (std::size_t k = 0; k < kBenchTableMetrics; ++k)
+      md << " " << BenchCell(values[k], k) << " |";
     md << " " << StringPrintf("%.0f", secs) << " | "
        << StringPrintf("%.0f", memory) << " |\n";
     std::string quoted = error;
@@ -430,12 +419,7 @@ SweepTable CollectSweep(const fs::path& sweep) {
                            "pano4d " + key.second + ", spread", spread, "", "");
     // After a scene's last configuration, its published rows.
     if (i + 1 < order.size() && order[i + 1].first == key.first) continue;
-    const std::string kind = suite == "kubric"  ? "kubric4d"
-                             : suite == "synth" ? ""
-                                                : suite;
-    if (!benchmarks.count(suite))
-      benchmarks[suite] =
-          kind.empty() ? Json() : BenchmarkMeta(DatasetsMetaDir(), kind);
+    if (!benchmarks.count(suite)) benchmarks[suite] = SuiteBenchmarkMeta(suite);
     for (const PublishedRow& p : PublishedRows(benchmarks[suite], key.first)) {
       if (p.mean) continue;
       md << BenchMarkdownRow(key.first, suite, p.method + " (" + p.source + ")",

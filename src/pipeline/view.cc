@@ -6,7 +6,6 @@
 #include "src/core/file.h"
 #include "src/core/strings.h"
 #include "src/gs/scene4d.h"
-#include "src/pano/trajectory_io.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -57,8 +56,7 @@ std::uint64_t PlyBytesPerGaussian(int sh_degree) {
   return 4u * (14 + 3 * (sh_degree + 1) * (sh_degree + 1));
 }
 
-Json SceneExtras(const FittedWorkspace& fitted,
-                 const std::vector<ExpandedView>& expanded) {
+Json SceneExtras(const FittedWorkspace& fitted) {
   const Eigen::Vector3d centre = fitted.Center();
   Eigen::Vector3d down = Eigen::Vector3d::Zero();
   for (const WorkspaceFrame& f : fitted.frames.train)
@@ -70,7 +68,7 @@ Json SceneExtras(const FittedWorkspace& fitted,
       RasterCamera::FromPosed(fitted.MiddleFrame().camera);
   const double extent = (middle.Center().cast<double>() - centre).norm();
   Json expanded_json = Json::array();
-  for (const ExpandedView& v : expanded) {
+  for (const ExpandedView& v : fitted.expanded) {
     expanded_json.push_back({{"m", v.m},
                              {"e", v.e},
                              {"t", v.t},
@@ -112,10 +110,6 @@ ViewSummary RunView(const Workspace& ws, const ViewOptions& o) {
     }
   }
   const FittedWorkspace fitted = LoadFittedWorkspace(ws);
-  const std::vector<ExpandedView> expanded =
-      fs::exists(ws.trajectories_json())
-          ? ReadTrajectories(ws.trajectories_json())
-          : std::vector<ExpandedView>{};
   ViewSummary summary;
   summary.out = o.out.empty() ? ws.pano4d() / "view" : o.out;
   EnsureDirectory(summary.out);
@@ -128,8 +122,7 @@ ViewSummary RunView(const Workspace& ws, const ViewOptions& o) {
     summary.page_bytes += fs::file_size(to);
   }
   const GaussianScene& scene = fitted.scene;
-  summary.scene_bytes =
-      WriteScene4d(summary.out, scene, SceneExtras(fitted, expanded));
+  summary.scene_bytes = WriteScene4d(summary.out, scene, SceneExtras(fitted));
   summary.static_gaussians = scene.statics.size();
   summary.dynamic_gaussians = scene.dynamics.size();
   summary.times = scene.num_times;

@@ -12,7 +12,6 @@
 
 #include "src/core/json.h"
 #include "src/core/workspace.h"
-#include "src/pano/trajectory.h"
 #include "src/pipeline/scene_outputs.h"
 
 namespace pano4d {
@@ -48,8 +47,7 @@ ViewSummary RunView(const Workspace& workspace, const ViewOptions& options);
 // "t", "camera"} (cameras as CameraToJson), the panorama centre, the
 // capture's up direction (minus the cameras' mean y axis) and the extent
 // (the middle camera's distance to the centre), for frusta and speeds.
-Json SceneExtras(const FittedWorkspace& fitted,
-                 const std::vector<ExpandedView>& expanded);
+Json SceneExtras(const FittedWorkspace& fitted);
 
 // A 3DGS PLY's bytes per Gaussian at SH degree `sh_degree` (ply.h's
 // layout: 14 + 3 (d + 1)^2 floats).

@@ -159,24 +159,17 @@ TEST_F(SweepTest, TheStopSignalCheckpointsAndTheRerunResumes) {
   const std::string run =
       kPano4d + " run --dataset '" + (dir_->path() / "root" / "tiny").string() +
       "' --workspace '" + ws.string() + "' --iterations 20000";
-  ASSERT_EQ(RunLogged("(" + run +
-                          " & pid=$!; sleep 3; kill -USR1 $pid; "
-                          "wait $pid; exit $?)",
-                      log),
-            75)
-      << Slurp(log);
+  // The run, sent the signal 3 s after it starts; its exit status.
+  const std::string signalled =
+      "(" + run + " & pid=$!; sleep 3; kill -USR1 $pid; wait $pid; exit $?)";
+  ASSERT_EQ(RunLogged(signalled, log), 75) << Slurp(log);
   EXPECT_NE(Slurp(log).find("stopped on request"), std::string::npos)
       << Slurp(log);
   EXPECT_TRUE(fs::exists(ws / "pano4d/checkpoints/fit.ckpt"));
   EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
   // The same command goes on from the checkpoint (stopped again here, to
   // keep the test short).
-  ASSERT_EQ(RunLogged("(" + run +
-                          " & pid=$!; sleep 3; kill -USR1 $pid; "
-                          "wait $pid; exit $?)",
-                      log),
-            75)
-      << Slurp(log);
+  ASSERT_EQ(RunLogged(signalled, log), 75) << Slurp(log);
   EXPECT_NE(Slurp(log).find("fit: resumed from"), std::string::npos)
       << Slurp(log);
 }
