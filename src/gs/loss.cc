@@ -1,9 +1,11 @@
 #include "src/gs/loss.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
 
+#include <omp.h>
 #include <opencv2/core.hpp>
 
 #include "src/core/error.h"
@@ -62,26 +64,36 @@ void BlurRow(const double* __restrict padded, int width,
   }
 }
 
-// Vertical pass at row py of `rows` (height rows of `stride` values, each
-// already blurred horizontally), zero padding beyond the image.
-void BlurColumn(const double* __restrict rows, int height, int py,
-                std::size_t stride, double* __restrict out) {
+// Vertical pass at one row: rows[i] is image row py - kRadius + i, already
+// blurred horizontally (`stride` values), or null beyond the image (zero
+// padding).
+void BlurColumn(const double* const* rows, std::size_t stride,
+                double* __restrict out) {
   const std::array<double, kWindow>& w = Window();
-  const double* centre = rows + py * stride;
+  const double* centre = rows[kRadius];
   for (std::size_t i = 0; i < stride; ++i) out[i] = w[kRadius] * centre[i];
   for (int d = 1; d <= kRadius; ++d) {
     const double wd = w[kRadius - d];
-    const bool up = py - d >= 0, down = py + d < height;
-    const double* above = centre - d * stride;
-    const double* below = centre + d * stride;
-    if (up && down) {
+    const double* above = rows[kRadius - d];
+    const double* below = rows[kRadius + d];
+    if (above != nullptr && below != nullptr) {
       for (std::size_t i = 0; i < stride; ++i)
         out[i] += wd * (above[i] + below[i]);
-    } else if (up) {
+    } else if (above != nullptr) {
       for (std::size_t i = 0; i < stride; ++i) out[i] += wd * above[i];
-    } else if (down) {
+    } else if (below != nullptr) {
       for (std::size_t i = 0; i < stride; ++i) out[i] += wd * below[i];
     }
+  }
+}
+
+// The kWindow rows centred on py held in `ring` (row r in slot r mod
+// kWindow, `stride` values a row), null beyond the image.
+void RingRows(double* ring, std::size_t stride, int py, int height,
+              const double* rows[kWindow]) {
+  for (int i = 0; i < kWindow; ++i) {
+    const int r = py - kRadius + i;
+    rows[i] = r >= 0 && r < height ? ring + (r % kWindow) * stride : nullptr;
   }
 }
 
@@ -111,13 +123,10 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
 
   PhotometricLossBuffers local;
   PhotometricLossBuffers& b = buffers != nullptr ? *buffers : local;
-  const std::size_t pixels = static_cast<std::size_t>(width) * height;
   const std::size_t moment_stride = static_cast<std::size_t>(width) * kMoments;
   const std::size_t grad_stride = static_cast<std::size_t>(width) * kGrads;
-  b.rows.resize(pixels * kMoments);     // moments blurred horizontally
-  b.moments.resize(pixels * kMoments);  // ... and vertically
-  b.grads.resize(pixels * kGrads);
-  b.blurred.resize(pixels * kGrads);
+  const std::size_t padded_width =
+      static_cast<std::size_t>(width) + 2 * kRadius;
   std::vector<double> ssim_rows(height), l1_rows(height), mse_rows(height);
   if (d_rendered != nullptr) d_rendered->resize(n);
   const double scale = 1.0 / static_cast<double>(n);
@@ -126,100 +135,129 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
   const float* x = rendered.data();
   const float* y = target.data();
 
+  // Each thread streams one band of rows [r0, r1) through three passes,
+  // kRadius rows apart, so that its maps stay in the cache: (1) a row's
+  // moments blurred along it, into a ring of kWindow rows; (2) kRadius rows
+  // behind, those blurred down the columns, SSIM and its gradient maps,
+  // blurred along the row into a second ring; (3) kRadius rows further
+  // behind, the gradient maps blurred down the columns and dL/dr. A band
+  // recomputes the 2 kRadius rows of (1) and kRadius rows of (2) beyond its
+  // edges that it reads; they are the same values whoever computes them, so
+  // the result does not depend on the thread count.
 #pragma omp parallel
   {
-    const std::size_t padded_width =
-        static_cast<std::size_t>(width) + 2 * kRadius;
-    std::vector<double> padded(padded_width * kMoments, 0.0);
-    // The moments of each row, blurred along it. Map q * 3 + c is moment q
-    // (x, y, x^2, y^2, xy) of channel c.
-#pragma omp for schedule(static)
-    for (int py = 0; py < height; ++py) {
-      const float* xr = x + static_cast<std::size_t>(py) * width * 3;
-      const float* yr = y + static_cast<std::size_t>(py) * width * 3;
-      for (int c = 0; c < 3; ++c) {
-        double* m[5];
-        for (int q = 0; q < 5; ++q)
-          m[q] = &padded[(q * 3 + c) * padded_width + kRadius];
-        for (int px = 0; px < width; ++px) {
-          const double xv = xr[px * 3 + c], yv = yr[px * 3 + c];
-          m[0][px] = xv;
-          m[1][px] = yv;
-          m[2][px] = xv * xv;
-          m[3][px] = yv * yv;
-          m[4][px] = xv * yv;
+    const int bands = omp_get_num_threads(), band = omp_get_thread_num();
+#pragma omp single
+    b.threads.resize(bands);
+    std::vector<double>& scratch = b.threads[band];
+    // Every value is written before it is read but the padding of
+    // `padded`, zeros from the first call on.
+    const std::size_t size = kWindow * (moment_stride + grad_stride) +
+                             padded_width * kMoments + moment_stride +
+                             2 * grad_stride;
+    if (scratch.size() != size) scratch.assign(size, 0.0);
+    double* moment_ring = scratch.data();
+    double* grad_ring = moment_ring + kWindow * moment_stride;
+    double* padded = grad_ring + kWindow * grad_stride;
+    double* moments = padded + padded_width * kMoments;
+    double* grads = moments + moment_stride;
+    double* blurred = grads + grad_stride;
+    const double* rows[kWindow];
+
+    const int r0 = height * band / bands, r1 = height * (band + 1) / bands;
+    const int first = std::max(0, r0 - 2 * kRadius);
+    const int last = std::min(height, r1 + 2 * kRadius);
+    const int grads_first = std::max(0, r0 - kRadius);
+    const int grads_last = std::min(height, r1 + kRadius);
+    for (int t = first; r0 < r1 && t < r1 + 2 * kRadius; ++t) {
+      // (1) Row t's moments, blurred along it. Map q * 3 + c is moment q
+      // (x, y, x^2, y^2, xy) of channel c.
+      if (t < last) {
+        const float* xr = x + static_cast<std::size_t>(t) * width * 3;
+        const float* yr = y + static_cast<std::size_t>(t) * width * 3;
+        for (int c = 0; c < 3; ++c) {
+          double* m[5];
+          for (int q = 0; q < 5; ++q)
+            m[q] = &padded[(q * 3 + c) * padded_width + kRadius];
+          for (int px = 0; px < width; ++px) {
+            const double xv = xr[px * 3 + c], yv = yr[px * 3 + c];
+            m[0][px] = xv;
+            m[1][px] = yv;
+            m[2][px] = xv * xv;
+            m[3][px] = yv * yv;
+            m[4][px] = xv * yv;
+          }
         }
+        BlurRow<kMoments>(padded, width,
+                          moment_ring + (t % kWindow) * moment_stride);
       }
-      BlurRow<kMoments>(padded.data(), width, &b.rows[py * moment_stride]);
-    }
-    // Down the columns, then SSIM and its gradient maps per pixel (map
-    // c, 3 + c and 6 + c: with respect to mu_x, E[x^2] and E[xy]).
-#pragma omp for schedule(static)
-    for (int py = 0; py < height; ++py) {
-      double* row = &b.moments[py * moment_stride];
-      BlurColumn(b.rows.data(), height, py, moment_stride, row);
-      double* g = &b.grads[py * grad_stride];
-      double ssim = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double *mu_x = row + c * width, *mu_y = row + (3 + c) * width,
-                     *e_xx = row + (6 + c) * width,
-                     *e_yy = row + (9 + c) * width,
-                     *e_xy = row + (12 + c) * width;
-        double *g_mu = g + c * width, *g_xx = g + (3 + c) * width,
-               *g_xy = g + (6 + c) * width;
-        for (int px = 0; px < width; ++px) {
-          const double mx = mu_x[px], my = mu_y[px];
-          const double a1 = 2 * mx * my + kC1;
-          const double a2 = 2 * (e_xy[px] - mx * my) + kC2;
-          const double b1 = mx * mx + my * my + kC1;
-          const double b2 = (e_xx[px] - mx * mx) + (e_yy[px] - my * my) + kC2;
-          const double s = a1 * a2 / (b1 * b2);
-          ssim += s;
-          // S = A1 A2 / (B1 B2) as a function of mu_x, E[x^2] and E[xy].
-          g_mu[px] = d_s * (2 * my * (a2 - a1) / (b1 * b2) -
-                            2 * mx * s * (1 / b1 - 1 / b2));
-          g_xx[px] = d_s * (-s / b2);
-          g_xy[px] = d_s * (2 * a1 / (b1 * b2));
+      // (2) Row py: SSIM and its gradient maps per pixel (map c, 3 + c
+      // and 6 + c: with respect to mu_x, E[x^2] and E[xy]).
+      const int py = t - kRadius;
+      if (py >= grads_first && py < grads_last) {
+        RingRows(moment_ring, moment_stride, py, height, rows);
+        BlurColumn(rows, moment_stride, moments);
+        double ssim = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double *mu_x = moments + c * width,
+                       *mu_y = moments + (3 + c) * width,
+                       *e_xx = moments + (6 + c) * width,
+                       *e_yy = moments + (9 + c) * width,
+                       *e_xy = moments + (12 + c) * width;
+          double *g_mu = grads + c * width, *g_xx = grads + (3 + c) * width,
+                 *g_xy = grads + (6 + c) * width;
+          for (int px = 0; px < width; ++px) {
+            const double mx = mu_x[px], my = mu_y[px];
+            const double a1 = 2 * mx * my + kC1;
+            const double a2 = 2 * (e_xy[px] - mx * my) + kC2;
+            const double b1 = mx * mx + my * my + kC1;
+            const double b2 = (e_xx[px] - mx * mx) + (e_yy[px] - my * my) + kC2;
+            const double s = a1 * a2 / (b1 * b2);
+            ssim += s;
+            // S = A1 A2 / (B1 B2) as a function of mu_x, E[x^2] and E[xy].
+            g_mu[px] = d_s * (2 * my * (a2 - a1) / (b1 * b2) -
+                              2 * mx * s * (1 / b1 - 1 / b2));
+            g_xx[px] = d_s * (-s / b2);
+            g_xy[px] = d_s * (2 * a1 / (b1 * b2));
+          }
         }
+        if (py >= r0 && py < r1) ssim_rows[py] = ssim;
+        // The window is symmetric and zero padding makes the filter
+        // self-adjoint: the backward blurs the gradient maps the same way.
+        for (int j = 0; j < kGrads; ++j)
+          std::copy(grads + j * width, grads + (j + 1) * width,
+                    padded + j * padded_width + kRadius);
+        BlurRow<kGrads>(padded, width,
+                        grad_ring + (py % kWindow) * grad_stride);
       }
-      ssim_rows[py] = ssim;
-    }
-    // The window is symmetric and zero padding makes the filter
-    // self-adjoint: the backward blurs the gradient maps the same way.
-    std::fill(padded.begin(), padded.end(), 0.0);
-#pragma omp for schedule(static)
-    for (int py = 0; py < height; ++py) {
-      const double* g = &b.grads[py * grad_stride];
-      for (int j = 0; j < kGrads; ++j)
-        std::copy(g + j * width, g + (j + 1) * width,
-                  padded.begin() + j * padded_width + kRadius);
-      BlurRow<kGrads>(padded.data(), width, &b.rows[py * grad_stride]);
-    }
-#pragma omp for schedule(static)
-    for (int py = 0; py < height; ++py) {
-      double* blurred = &b.blurred[py * grad_stride];
-      BlurColumn(b.rows.data(), height, py, grad_stride, blurred);
-      const std::size_t first = static_cast<std::size_t>(py) * width * 3;
-      double l1 = 0, mse = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double *g_mu = blurred + c * width,
-                     *g_xx = blurred + (3 + c) * width,
-                     *g_xy = blurred + (6 + c) * width;
-        for (int px = 0; px < width; ++px) {
-          const std::size_t i = first + px * 3 + c;
-          const double xv = x[i], yv = y[i], diff = xv - yv;
-          l1 += std::abs(diff);
-          mse += diff * diff;
-          if (d_rendered == nullptr) continue;
-          // d|d|/dd = sign(d), 0 at 0 (a subgradient).
-          const double d_l1 =
-              (1 - ssim_weight) * scale * ((diff > 0) - (diff < 0));
-          (*d_rendered)[i] = static_cast<float>(
-              d_l1 + g_mu[px] + 2 * xv * g_xx[px] + yv * g_xy[px]);
+      // (3) Row pz: L1, squared error and dL/dr.
+      const int pz = t - 2 * kRadius;
+      if (pz >= r0 && pz < r1) {
+        RingRows(grad_ring, grad_stride, pz, height, rows);
+        BlurColumn(rows, grad_stride, blurred);
+        const std::size_t first_value =
+            static_cast<std::size_t>(pz) * width * 3;
+        double l1 = 0, mse = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double *g_mu = blurred + c * width,
+                       *g_xx = blurred + (3 + c) * width,
+                       *g_xy = blurred + (6 + c) * width;
+          for (int px = 0; px < width; ++px) {
+            const std::size_t i = first_value + px * 3 + c;
+            const double xv = x[i], yv = y[i], diff = xv - yv;
+            l1 += std::abs(diff);
+            mse += diff * diff;
+            if (d_rendered == nullptr) continue;
+            // d|d|/dd = sign(d), 0 at 0 (a subgradient).
+            const double d_l1 =
+                (1 - ssim_weight) * scale * ((diff > 0) - (diff < 0));
+            (*d_rendered)[i] = static_cast<float>(
+                d_l1 + g_mu[px] + 2 * xv * g_xx[px] + yv * g_xy[px]);
+          }
         }
+        l1_rows[pz] = l1;
+        mse_rows[pz] = mse;
       }
-      l1_rows[py] = l1;
-      mse_rows[py] = mse;
     }
   }
 

@@ -20,10 +20,11 @@ struct PhotometricLoss {
   double total = 0.0;  // the weighted loss above
 };
 
-// Scratch of ComputePhotometricLoss, reused between calls (a fit's every
-// step) so that a step does not allocate.
+// Scratch of ComputePhotometricLoss, one per thread (rings of a few
+// rows), reused between calls (a fit's every step) so that a step does not
+// allocate.
 struct PhotometricLossBuffers {
-  std::vector<double> rows, moments, grads, blurred;
+  std::vector<std::vector<double>> threads;
 };
 
 // The loss, and dL/dr into `d_rendered` (resized to r's size) when it is

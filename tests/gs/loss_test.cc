@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <utility>
 
 #include <omp.h>
 
@@ -60,31 +61,42 @@ TEST(PhotometricLossTest, GradientMatchesCentralDifferences) {
   EXPECT_EQ(good, checked);
 }
 
-// Rows run in parallel and their sums are added in row order: the loss
-// and its gradient are the same bytes on one thread and on two.
-TEST(PhotometricLossTest, SameBytesWithOneAndTwoThreads) {
-  const int w = 61, h = 37;
-  const std::vector<float> a = RandomImage(w, h, 8), b = RandomImage(w, h, 9);
+// Each thread streams a band of rows and recomputes the rows beyond its
+// edges that it reads; sums are added in row order: the loss and its
+// gradient are the same bytes whatever the thread count, also with bands
+// thinner than the window and with more threads than rows.
+TEST(PhotometricLossTest, SameBytesWhateverTheThreads) {
   const int threads = omp_get_max_threads();
-  const auto run = [&](int t, std::vector<float>* grad) {
-    omp_set_num_threads(t);
+  for (const auto& [w, h] : {std::pair{61, 37}, std::pair{9, 3}}) {
+    const std::vector<float> a = RandomImage(w, h, 8), b = RandomImage(w, h, 9);
+    const auto run = [&](int t, std::vector<float>* grad) {
+      omp_set_num_threads(t);
+      PhotometricLossBuffers buffers;
+      return ComputePhotometricLoss(a, b, w, h, 0.2, grad, &buffers);
+    };
+    std::vector<float> g1;
+    const PhotometricLoss one = run(1, &g1);
+    for (int t : {2, 3, 5}) {
+      std::vector<float> g;
+      const PhotometricLoss many = run(t, &g);
+      EXPECT_EQ(one.total, many.total) << w << "x" << h << ", " << t;
+      EXPECT_EQ(one.ssim, many.ssim) << w << "x" << h << ", " << t;
+      EXPECT_EQ(one.mse, many.mse) << w << "x" << h << ", " << t;
+      ASSERT_EQ(g1.size(), g.size());
+      EXPECT_EQ(std::memcmp(g1.data(), g.data(), g1.size() * sizeof(float)), 0)
+          << w << "x" << h << ", " << t << " threads";
+    }
+    omp_set_num_threads(threads);
+    // Reused buffers give the same result again, also after another size.
     PhotometricLossBuffers buffers;
-    return ComputePhotometricLoss(a, b, w, h, 0.2, grad, &buffers);
-  };
-  std::vector<float> g1, g2;
-  const PhotometricLoss one = run(1, &g1), two = run(2, &g2);
-  omp_set_num_threads(threads);
-  EXPECT_EQ(one.total, two.total);
-  EXPECT_EQ(one.ssim, two.ssim);
-  ASSERT_EQ(g1.size(), g2.size());
-  EXPECT_EQ(std::memcmp(g1.data(), g2.data(), g1.size() * sizeof(float)), 0);
-  // Reused buffers give the same result again.
-  PhotometricLossBuffers buffers;
-  std::vector<float> g3;
-  ComputePhotometricLoss(b, a, w, h, 0.2, &g3, &buffers);
-  EXPECT_EQ(ComputePhotometricLoss(a, b, w, h, 0.2, &g3, &buffers).total,
-            one.total);
-  EXPECT_EQ(g3, g1);
+    std::vector<float> g3;
+    const std::vector<float> small = RandomImage(5, 4, 10);
+    ComputePhotometricLoss(small, small, 5, 4, 0.2, &g3, &buffers);
+    ComputePhotometricLoss(b, a, w, h, 0.2, &g3, &buffers);
+    EXPECT_EQ(ComputePhotometricLoss(a, b, w, h, 0.2, &g3, &buffers).total,
+              one.total);
+    EXPECT_EQ(g3, g1);
+  }
 }
 
 TEST(PhotometricLossTest, SsimOnlyAndL1OnlyWeights) {
