@@ -21,7 +21,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config ccache git
   libeigen3-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev libcli11-dev
   libceres-dev libpcl-dev libflann-dev libtbb-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libzip-dev
   colmap
   chromium  # the browser test of `pano4d view` (headless, software WebGL)
   slurm-wlm munge  # the sweep test's single-node cluster (scripts/slurm_local.sh)

@@ -40,6 +40,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
                 "completes (without --force or --resume such a workspace is "
                 "refused)");
   AddFitOptions(sub, &o->fit);
+  AddPriorsOptions(sub, &o->fit.priors);
   sub->footer(
       "Writes WS/pano4d/checkpoints/fit.ckpt, WS/pano4d/fit.json (summary: "
       "every option given and used, what ran, how long, why it stopped), "

@@ -24,6 +24,19 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
                   "Thickness of moving objects, relative to their depth, "
                   "for the hidden-depth term")
       ->capture_default_str();
+  app->add_option("--flow-weight", o->flow_weight,
+                  "Weight of the flow loss on views with learned flow "
+                  "(--priors): a moving Gaussian posed at a neighbouring "
+                  "frame's time lands where the flow carries its pixel (0: "
+                  "off)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--disparity-weight", o->disparity_weight,
+                  "Weight of the scale- and shift-invariant loss of the "
+                  "rendered inverse depth against learned disparity "
+                  "(--priors; 0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   app->add_flag(
       "--no-appearance", [o](std::int64_t) { o->appearance = false; },
       "No per-frame colour transform: the Gaussians' colours explain every "
@@ -270,6 +283,24 @@ void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir) {
                   "(Ceres, Cauchy loss); preferred to a dataset's own depth "
                   "and to stereo")
       ->check(CLI::ExistingDirectory);
+}
+
+void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
+                      bool* masks_join) {
+  app->add_option("--priors", *priors,
+                  "Learned priors as the tools wrote them (MiDaS / Depth "
+                  "Anything / UniDepth disparity, metric depth, RAFT flow, "
+                  "TAP / CoTracker tracks, motion masks in the layouts of "
+                  "DynamicNeRF, OmniMotion, Shape of Motion and MoSca; any "
+                  "resolution): depth for moving pixels and where stereo "
+                  "has none, the motion's tracks, a flow loss; `pano4d "
+                  "dataset info DIR` lists what a folder holds")
+      ->check(CLI::ExistingDirectory);
+  if (masks_join) {
+    app->add_flag("--prior-masks-join", *masks_join,
+                  "Add the priors' motion masks to the computed ones instead "
+                  "of replacing them");
+  }
 }
 
 void AddHoldoutOption(CLI::App* app, int* holdout) {

@@ -74,6 +74,10 @@ void AddHoldoutOption(CLI::App* app, int* holdout);
 void AddLpipsWeightsOption(CLI::App* app, std::filesystem::path* weights);
 // --depth-dir: depth maps from another tool, aligned to the SfM points.
 void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir);
+// --priors: a folder of learned priors (src/datasets/priors.h); with
+// `masks_join`, --prior-masks-join too (the depth stage's).
+void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
+                      bool* masks_join = nullptr);
 // Video or images: the longest side frames are resized to (--max-size).
 void AddMaxSizeOption(CLI::App* app, int* max_size);
 // The synthetic scene's preset (--preset tiny|small|medium).

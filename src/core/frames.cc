@@ -121,6 +121,7 @@ void WriteWorkspaceFrames(const fs::path& workspace,
              {"dataset", Stored(workspace, frames.dataset)},
              {"dataset_factor", frames.dataset_factor},
              {"num_times", frames.num_times},
+             {"priors", Stored(workspace, frames.priors)},
              {"depth_options", frames.depth_options},
              {"train", train},
              {"val", val}});
@@ -142,6 +143,8 @@ WorkspaceFrames ReadWorkspaceFrames(const fs::path& workspace) {
   frames.dataset =
       Loaded(workspace, GetJsonOr<std::string>(j, "dataset", "", source));
   frames.dataset_factor = GetJsonOr<int>(j, "dataset_factor", 0, source);
+  frames.priors =
+      Loaded(workspace, GetJsonOr<std::string>(j, "priors", "", source));
   frames.depth_options = GetJsonOr<Json>(j, "depth_options", Json(), source);
   for (const Json& f : GetJson<Json>(j, "train", source))
     frames.train.push_back(FrameFromJson(workspace, f, source));

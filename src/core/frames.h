@@ -30,6 +30,9 @@ struct WorkspaceFrame {
 inline constexpr const char* kDepthFromDataset = "dataset";
 inline constexpr const char* kDepthFromStereo = "stereo";
 inline constexpr const char* kDepthFromExternal = "external";
+// Stereo where it has support on static pixels, a learned depth prior
+// (--priors) aligned to the SfM points everywhere else.
+inline constexpr const char* kDepthFromPriors = "stereo+priors";
 
 struct WorkspaceFrames {
   std::string source;  // what the frames came from, for reports
@@ -41,6 +44,9 @@ struct WorkspaceFrames {
   std::filesystem::path dataset;
   int dataset_factor = 0;
   int num_times = 0;
+  // The learned priors folder the depth stage read (--priors); the fit
+  // reads its flow and disparity when not given another. Empty: none.
+  std::filesystem::path priors;
   // The depth stage's options, for the record (null when not stored).
   nlohmann::json depth_options;
   std::vector<WorkspaceFrame> train;

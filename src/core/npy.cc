@@ -9,6 +9,8 @@
 #include <ostream>
 #include <sstream>
 
+#include <opencv2/core.hpp>
+
 #include "src/core/error.h"
 #include "src/core/file.h"
 
@@ -168,7 +170,7 @@ void ParseDescr(const std::string& descr, const std::string& source,
     size = size * 10 + (descr[i] - '0');
   }
   const bool valid_size =
-      (kind == 'f' && (size == 4 || size == 8)) ||
+      (kind == 'f' && (size == 2 || size == 4 || size == 8)) ||
       ((kind == 'i' || kind == 'u') &&
        (size == 1 || size == 2 || size == 4 || size == 8)) ||
       (kind == 'b' && size == 1);
@@ -192,6 +194,9 @@ double ElementAsDouble(const NpyArray& a, std::int64_t i) {
   const std::uint8_t* p = a.data.data() + i * a.item_size;
   switch (a.kind) {
     case 'f':
+      if (a.item_size == 2)
+        return static_cast<float>(
+            cv::float16_t::fromBits(Element<std::uint16_t>(p)));
       return a.item_size == 4 ? Element<float>(p) : Element<double>(p);
     case 'b':
       return p[0] != 0 ? 1.0 : 0.0;
@@ -284,6 +289,16 @@ NpyArray NpyArray::FromFloats(std::vector<std::int64_t> shape,
 NpyArray NpyArray::FromDoubles(std::vector<std::int64_t> shape,
                                const std::vector<double>& values) {
   return FromValues(std::move(shape), values);
+}
+
+NpyArray NpyArray::FromFloatsAsHalves(std::vector<std::int64_t> shape,
+                                      const std::vector<float>& values) {
+  std::vector<std::uint16_t> bits(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i)
+    bits[i] = cv::float16_t(values[i]).bits();
+  NpyArray array = FromValues(std::move(shape), bits);
+  array.kind = 'f';
+  return array;
 }
 
 NpyArray ParseNpy(const std::uint8_t* bytes, std::size_t size,

@@ -10,8 +10,9 @@ namespace pano4d {
 
 // A NumPy .npy array (format versions 1.0, 2.0 and 3.0). Only C-order arrays
 // of plain numeric types are supported: bool, int8..int64, uint8..uint64,
-// float32, float64, in either byte order. Data are held in this machine's
-// (little-endian) byte order, whatever the file's.
+// float16 (MoSca's flow files), float32, float64, in either byte order.
+// Data are held in this machine's (little-endian) byte order, whatever the
+// file's.
 struct NpyArray {
   char kind = 'f';    // 'f' float, 'i' signed, 'u' unsigned, 'b' bool
   int item_size = 4;  // bytes per element
@@ -30,6 +31,9 @@ struct NpyArray {
                              const std::vector<float>& values);
   static NpyArray FromDoubles(std::vector<std::int64_t> shape,
                               const std::vector<double>& values);
+  // float16 ('<f2'), each value rounded to the nearest half.
+  static NpyArray FromFloatsAsHalves(std::vector<std::int64_t> shape,
+                                     const std::vector<float>& values);
 };
 
 // Guards against corrupt headers: a header may not be longer than this, and

@@ -12,14 +12,27 @@
 namespace pano4d {
 namespace {
 
-// (s d + b - z) / z: relative, so near and far points weigh alike.
-struct RelativeDepthResidual {
-  RelativeDepthResidual(double d, double z) : d(d), z(z) {}
+// The relative residual of one sample under each model (DepthModel): (s d
+// + b - z) / z, z (s d + b) - 1 (disparity), s d / z - 1 (scale; shift
+// held at 0).
+struct RelativeResidual {
+  RelativeResidual(DepthModel model, double d, double z)
+      : model(model), d(d), z(z) {}
   template <typename T>
   bool operator()(const T* scale, const T* shift, T* residual) const {
-    residual[0] = (scale[0] * d + shift[0] - z) / z;
+    switch (model) {
+      case DepthModel::kAffineDisparity:
+        residual[0] = z * (scale[0] * d + shift[0]) - 1.0;
+        break;
+      case DepthModel::kScale:
+        residual[0] = scale[0] * d / z - 1.0;
+        break;
+      default:
+        residual[0] = (scale[0] * d + shift[0] - z) / z;
+    }
     return true;
   }
+  DepthModel model;
   double d, z;
 };
 
@@ -44,46 +57,82 @@ void DepthAlignmentOptions::Check() const {
 DepthAlignment AlignDepth(const cv::Mat& depth,
                           const std::vector<DepthSample>& samples,
                           const DepthAlignmentOptions& options) {
+  return AlignDepthModel(depth, samples, DepthModel::kAffineDepth, options);
+}
+
+DepthAlignment AlignDepthModel(const cv::Mat& map,
+                               const std::vector<DepthSample>& samples,
+                               DepthModel model,
+                               const DepthAlignmentOptions& options) {
   options.Check();
-  if (depth.empty() || depth.type() != CV_32FC1)
+  if (map.empty() || map.type() != CV_32FC1)
     throw Error("depth alignment", "depth", "", "expected a CV_32F map");
+  const bool disparity = model == DepthModel::kAffineDisparity;
   std::vector<double> ds, zs;
   for (const DepthSample& s : samples) {
     if (!s.pixel.allFinite() || !(s.z > 0) || !std::isfinite(s.z)) continue;
     const int u = static_cast<int>(std::floor(s.pixel.x()));
     const int v = static_cast<int>(std::floor(s.pixel.y()));
-    if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;
-    const float d = depth.at<float>(v, u);
-    if (!(d > 0) || !std::isfinite(d)) continue;
+    if (u < 0 || v < 0 || u >= map.cols || v >= map.rows) continue;
+    const float d = map.at<float>(v, u);
+    if (!std::isfinite(d) || (!disparity && !(d > 0))) continue;
     ds.push_back(d);
     zs.push_back(s.z);
   }
   DepthAlignment a;
+  a.model = model;
   a.samples = static_cast<int>(ds.size());
   if (a.samples < options.min_samples) {
     throw Error("depth alignment", "samples", std::to_string(a.samples),
                 "fewer than " + std::to_string(options.min_samples) +
                     " sparse points fall on valid depth");
   }
-  // Start: the least-squares line z = s d + b.
   const Eigen::Map<const Eigen::VectorXd> d(ds.data(), ds.size());
   const Eigen::Map<const Eigen::VectorXd> z(zs.data(), zs.size());
-  const double d_mean = d.mean(), z_mean = z.mean();
+  const double d_mean = d.mean();
   const double d_var = (d.array() - d_mean).square().mean();
-  if (!(std::sqrt(d_var) > kMinDepthSpread * std::abs(d_mean))) {
+  if (model != DepthModel::kScale &&
+      !(std::sqrt(d_var) > kMinDepthSpread * std::abs(d_mean))) {
     throw Error("depth alignment", "depth", std::to_string(d_mean),
                 "constant under the sparse points: the scale is undetermined");
   }
-  double scale = ((d.array() - d_mean) * (z.array() - z_mean)).mean() / d_var;
-  double shift = z_mean - scale * d_mean;
+  // Start: the plain least-squares fit of the same residuals (linear in
+  // scale and shift for every model).
+  Eigen::MatrixXd design(ds.size(), model == DepthModel::kScale ? 1 : 2);
+  Eigen::VectorXd target(ds.size());
+  for (std::size_t i = 0; i < ds.size(); ++i) {
+    switch (model) {
+      case DepthModel::kAffineDisparity:
+        design.row(i) << z[i] * d[i], z[i];
+        target[i] = 1.0;
+        break;
+      case DepthModel::kScale:
+        design(i, 0) = d[i] / z[i];
+        target[i] = 1.0;
+        break;
+      default:  // replaced below
+        design.row(i) << d[i] / z[i], 1.0 / z[i];
+        target[i] = 1.0;
+    }
+  }
+  const Eigen::VectorXd start = design.colPivHouseholderQr().solve(target);
+  double scale = start[0];
+  double shift = model == DepthModel::kScale ? 0.0 : start[1];
+  if (model == DepthModel::kAffineDepth) {
+    // The unweighted line z = s d + b, as pano4d has always started.
+    const double z_mean = z.mean();
+    scale = ((d.array() - d_mean) * (z.array() - z_mean)).mean() / d_var;
+    shift = z_mean - scale * d_mean;
+  }
 
   ceres::Problem problem;
   for (std::size_t i = 0; i < ds.size(); ++i) {
     problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<RelativeDepthResidual, 1, 1, 1>(
-            new RelativeDepthResidual(ds[i], zs[i])),
+        new ceres::AutoDiffCostFunction<RelativeResidual, 1, 1, 1>(
+            new RelativeResidual(model, ds[i], zs[i])),
         new ceres::CauchyLoss(options.robust_scale), &scale, &shift);
   }
+  if (model == DepthModel::kScale) problem.SetParameterBlockConstant(&shift);
   ceres::Solver::Options solver;
   solver.max_num_iterations = options.max_iterations;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -98,11 +147,41 @@ DepthAlignment AlignDepth(const cv::Mat& depth,
   a.shift = shift;
   std::vector<double> errors;
   for (std::size_t i = 0; i < ds.size(); ++i) {
-    errors.push_back(std::abs((scale * ds[i] + shift - zs[i]) / zs[i]));
+    double r = 0;
+    RelativeResidual(model, ds[i], zs[i])(&scale, &shift, &r);
+    errors.push_back(std::abs(r));
     if (errors.back() <= options.robust_scale) ++a.inliers;
   }
   a.median_relative_error = UpperMedian(std::move(errors));
   return a;
+}
+
+cv::Mat ApplyDepthAlignment(const cv::Mat& map, const DepthAlignment& a,
+                            double max_depth) {
+  cv::Mat z(map.size(), CV_32FC1, cv::Scalar(0));
+  for (int y = 0; y < map.rows; ++y) {
+    const float* in = map.ptr<float>(y);
+    float* out = z.ptr<float>(y);
+    for (int x = 0; x < map.cols; ++x) {
+      const double d = in[x];
+      if (!std::isfinite(d)) continue;
+      double depth = 0;
+      switch (a.model) {
+        case DepthModel::kAffineDisparity: {
+          const double inverse = a.scale * d + a.shift;
+          depth = inverse > 0 ? 1.0 / inverse : 0.0;
+          break;
+        }
+        case DepthModel::kScale:
+          depth = d > 0 ? a.scale * d : 0.0;
+          break;
+        default:
+          depth = d > 0 ? a.scale * d + a.shift : 0.0;
+      }
+      if (depth > 0 && depth <= max_depth) out[x] = static_cast<float>(depth);
+    }
+  }
+  return z;
 }
 
 }  // namespace pano4d

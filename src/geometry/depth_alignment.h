@@ -24,8 +24,16 @@ struct DepthAlignmentOptions {
   void Check() const;  // throws pano4d::Error naming the field
 };
 
+// How a map's values relate to z-depth: the fitted parameters.
+enum class DepthModel {
+  kAffineDepth,      // z = s d + b: stereo, a tool's depth up to an affine
+  kAffineDisparity,  // 1 / z = s d + b: a monocular network's disparity
+  kScale,            // z = s d: metric depth in other units
+};
+
 struct DepthAlignment {
-  double scale = 1.0;  // z ~ scale * depth + shift
+  DepthModel model = DepthModel::kAffineDepth;
+  double scale = 1.0;  // z ~ scale * depth + shift (see DepthModel)
   double shift = 0.0;
   int samples = 0;  // samples with a valid depth under them
   int inliers = 0;  // of those, within robust_scale relative error
@@ -41,5 +49,21 @@ struct DepthAlignment {
 DepthAlignment AlignDepth(const cv::Mat& depth,
                           const std::vector<DepthSample>& samples,
                           const DepthAlignmentOptions& options = {});
+
+// The same fit for any DepthModel, with the relative residual of each: for
+// disparity z (s d + b) - 1, the relative error in inverse depth, so that
+// near and far points weigh alike and the fit stays linear. A disparity
+// map may hold 0 and negative values (a network's far background): every
+// finite value counts.
+DepthAlignment AlignDepthModel(const cv::Mat& map,
+                               const std::vector<DepthSample>& samples,
+                               DepthModel model,
+                               const DepthAlignmentOptions& options = {});
+
+// The z-depth map of `map` under `a`: 0 where the model gives no positive
+// depth or a depth beyond max_depth (a disparity near 0 is the far
+// background, whose depth an affine fit on nearer points cannot say).
+cv::Mat ApplyDepthAlignment(const cv::Mat& map, const DepthAlignment& a,
+                            double max_depth);
 
 }  // namespace pano4d

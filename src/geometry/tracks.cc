@@ -57,6 +57,57 @@ void TrackOptions::Check() const {
   }
 }
 
+Tracks2D ChainTracks(int num_times, int reference,
+                     const std::vector<Eigen::Vector2f>& seeds,
+                     const std::vector<FlowLink>& links,
+                     const TrackOptions& options) {
+  options.Check();
+  if (reference < 0 || reference >= num_times) {
+    throw Error("tracks", "reference", std::to_string(reference),
+                "outside the " + std::to_string(num_times) + " times");
+  }
+  Tracks2D tracks;
+  tracks.num_times = num_times;
+  tracks.reference_time = reference;
+  const std::size_t n = seeds.size();
+  const int times = num_times;
+  tracks.pixels.assign(n * times, Eigen::Vector2f::Zero());
+  tracks.valid.assign(n * times, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    tracks.pixels[i * times + reference] = seeds[i];
+    tracks.valid[i * times + reference] = 1;
+  }
+  const float threshold = static_cast<float>(options.consistency_threshold);
+  for (const FlowLink& link : links) {
+    if (link.forward.empty() || link.from < 0 || link.to < 0 ||
+        link.from >= times || link.to >= times)
+      continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!tracks.valid[i * times + link.from]) continue;
+      const Eigen::Vector2f p = tracks.pixels[i * times + link.from];
+      Eigen::Vector2f f, b;
+      if (!SampleFlow(link.forward, p, &f)) continue;
+      const Eigen::Vector2f q = p + f;
+      if (!link.backward.empty()) {
+        if (!SampleFlow(link.backward, q, &b)) continue;
+        if ((q + b - p).norm() > threshold) continue;
+      } else if (!link.valid.empty()) {
+        const int x = static_cast<int>(std::floor(p.x()));
+        const int y = static_cast<int>(std::floor(p.y()));
+        if (x < 0 || y < 0 || x >= link.valid.cols || y >= link.valid.rows ||
+            !link.valid.at<std::uint8_t>(y, x))
+          continue;
+        if (!(q.x() >= 0 && q.y() >= 0 && q.x() < link.forward.cols &&
+              q.y() < link.forward.rows))
+          continue;
+      }
+      tracks.pixels[i * times + link.to] = q;
+      tracks.valid[i * times + link.to] = 1;
+    }
+  }
+  return tracks;
+}
+
 Tracks2D ChainFlowTracks(const std::vector<cv::Mat>& frames, int reference,
                          const std::vector<Eigen::Vector2f>& seeds,
                          const TrackOptions& options) {
@@ -77,26 +128,11 @@ Tracks2D ChainFlowTracks(const std::vector<cv::Mat>& frames, int reference,
     }
     grey[t] = Grey8(frames[t], t);
   }
-  Tracks2D tracks;
-  tracks.num_times = times;
-  tracks.reference_time = reference;
-  const std::size_t n = seeds.size();
-  tracks.pixels.assign(n * times, Eigen::Vector2f::Zero());
-  tracks.valid.assign(n * times, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    tracks.pixels[i * times + reference] = seeds[i];
-    tracks.valid[i * times + reference] = 1;
-  }
   // The links of each direction are independent flow computations; they
   // run in parallel, then the chaining is sequential.
-  struct Link {
-    int from, to;
-    cv::Mat forward, backward;
-  };
-  std::vector<Link> links;
-  for (int t = reference; t + 1 < times; ++t)
-    links.push_back({t, t + 1, {}, {}});
-  for (int t = reference; t - 1 >= 0; --t) links.push_back({t, t - 1, {}, {}});
+  std::vector<FlowLink> links;
+  for (int t = reference; t + 1 < times; ++t) links.push_back({t, t + 1, {}, {}, {}});
+  for (int t = reference; t - 1 >= 0; --t) links.push_back({t, t - 1, {}, {}, {}});
   cv::parallel_for_(
       cv::Range(0, static_cast<int>(links.size())), [&](const cv::Range& r) {
         cv::Ptr<cv::DISOpticalFlow> dis =
@@ -107,28 +143,13 @@ Tracks2D ChainFlowTracks(const std::vector<cv::Mat>& frames, int reference,
         // 2026-11-23-full-resolution-tracks-and-static-scale-clamp.md).
         dis->setFinestScale(0);
         for (int l = r.start; l < r.end; ++l) {
-          Link& link = links[l];
+          FlowLink& link = links[l];
           if (grey[link.from].empty() || grey[link.to].empty()) continue;
           dis->calc(grey[link.from], grey[link.to], link.forward);
           dis->calc(grey[link.to], grey[link.from], link.backward);
         }
       });
-  const float threshold = static_cast<float>(options.consistency_threshold);
-  for (const Link& link : links) {
-    if (link.forward.empty()) continue;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!tracks.valid[i * times + link.from]) continue;
-      const Eigen::Vector2f p = tracks.pixels[i * times + link.from];
-      Eigen::Vector2f f, b;
-      if (!SampleFlow(link.forward, p, &f)) continue;
-      const Eigen::Vector2f q = p + f;
-      if (!SampleFlow(link.backward, q, &b)) continue;
-      if ((q + b - p).norm() > threshold) continue;
-      tracks.pixels[i * times + link.to] = q;
-      tracks.valid[i * times + link.to] = 1;
-    }
-  }
-  return tracks;
+  return ChainTracks(times, reference, seeds, links, options);
 }
 
 }  // namespace pano4d

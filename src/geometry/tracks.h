@@ -40,6 +40,26 @@ struct Tracks2D {
   }
 };
 
+// One link of a chain: dense flow from time `from` to time `to` (CV_32FC2,
+// pixels), and either the flow back (`backward`: a link holds where the
+// two miss by at most the consistency threshold) or a mask of where the
+// forward flow is trusted (`valid`, CV_8UC1, nonzero = trusted; a learned
+// flow's occlusion mask).
+struct FlowLink {
+  int from = 0, to = 0;
+  cv::Mat forward, backward, valid;
+};
+
+// Chains `seeds` (pixels at `reference`) along `links` over `num_times`
+// times: each link extends the tracks valid at its `from`, so links must
+// come in order away from the reference (reference -> reference + 1 -> ...
+// and reference -> reference - 1 -> ...). A missing link breaks the tracks
+// there. Throws pano4d::Error for a reference outside the times.
+Tracks2D ChainTracks(int num_times, int reference,
+                     const std::vector<Eigen::Vector2f>& seeds,
+                     const std::vector<FlowLink>& links,
+                     const TrackOptions& options = {});
+
 // `frames` holds one image per time (8-bit or float in [0, 1], 1 or 3
 // channels, all one size); an empty Mat is a time without a frame, where
 // every track breaks. `seeds` are pixels of the reference frame. Throws

@@ -40,6 +40,13 @@ std::string ViewsFingerprint(const std::vector<TrainingView>& views) {
     hash.AddArray(v.rgb);
     hash.AddArray(v.depth);
     hash.AddArray(v.dynamic);
+    // Priors only when present: a fit without them keeps its fingerprint.
+    if (!v.disparity.empty()) hash.AddArray(v.disparity);
+    for (const TrainingView::Flow& f : v.flows) {
+      hash.AddValue(f.view);
+      hash.AddArray(f.flow);
+      hash.AddArray(f.valid);
+    }
   }
   return hash.Hex();
 }

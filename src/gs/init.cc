@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -123,6 +124,47 @@ PointCloud Thin(const PointCloud& cloud, std::int64_t max) {
   return out;
 }
 
+// Tracks of `seeds` from the canonical time: along the views' own flow
+// (learned priors, TrainingView::flows) where they carry it between
+// neighbouring times, else along DIS flow computed on `frames`.
+Tracks2D ChainTracksAlongViews(const std::vector<TrainingView>& views,
+                               const std::vector<const TrainingView*>& by_time,
+                               const std::vector<cv::Mat>& frames,
+                               int canonical,
+                               const std::vector<Eigen::Vector2f>& seeds,
+                               const TrackOptions& options,
+                               std::string* source) {
+  const int num_times = static_cast<int>(by_time.size());
+  const cv::Size size = frames[canonical].size();
+  // The given flow from the view at time `from` to the view at `to`.
+  const auto link = [&](int from, int to) -> std::optional<FlowLink> {
+    const TrainingView* a = by_time[from];
+    if (!a || a->camera.width != size.width || a->camera.height != size.height)
+      return std::nullopt;
+    for (const TrainingView::Flow& f : a->flows) {
+      if (views[f.view].time != to) continue;
+      FlowLink l;
+      l.from = from;
+      l.to = to;
+      l.forward = MatView(f.flow, size.height, size.width, 2);
+      l.valid = MatView(f.valid, size.height, size.width);
+      return l;
+    }
+    return std::nullopt;
+  };
+  std::vector<FlowLink> links;
+  for (int t = canonical; t + 1 < num_times; ++t)
+    if (auto l = link(t, t + 1)) links.push_back(*l);
+  for (int t = canonical; t - 1 >= 0; --t)
+    if (auto l = link(t, t - 1)) links.push_back(*l);
+  if (links.empty()) {
+    *source = "DIS";
+    return ChainFlowTracks(frames, canonical, seeds, options);
+  }
+  *source = "priors";
+  return ChainTracks(num_times, canonical, seeds, links, options);
+}
+
 }  // namespace
 
 GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
@@ -211,6 +253,7 @@ nlohmann::json InitReport::ToJson() const {
           {"dynamic_points", dynamic_points},
           {"tracks", tracks},
           {"track_coverage", track_coverage},
+          {"track_flow", track_flow},
           {"num_bases", num_bases},
           {"canonical_time", canonical_time},
           {"voxel_size", voxel_size},
@@ -222,7 +265,7 @@ std::string InitReport::Brief() const {
   s << "init: " << static_points << " static Gaussians (of "
     << static_points_raw << " points), " << dynamic_points << " dynamic (of "
     << dynamic_points_raw << "), " << num_bases << " motion bases from "
-    << tracks << " tracks (coverage "
+    << tracks << " tracks along " << track_flow << " flow (coverage "
     << static_cast<int>(track_coverage * 100 + 0.5) << "%), canonical time "
     << canonical_time << ", voxel " << voxel_size << ", " << seconds << " s";
   return s.str();
@@ -376,7 +419,9 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                                      ref->camera.width +
                                  x] > 0)
         seeds.emplace_back(x + 0.5f, y + 0.5f);
-  const Tracks2D tracks2d = ChainFlowTracks(frames, canonical, seeds, o.tracks);
+  const Tracks2D tracks2d =
+      ChainTracksAlongViews(views, by_time, frames, canonical, seeds, o.tracks,
+                            &report.track_flow);
 
   // Lift: X(t) for every valid (track, time) with depth.
   const std::size_t n = tracks2d.size();

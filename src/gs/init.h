@@ -59,6 +59,9 @@ struct InitReport {
   std::int64_t dynamic_points_raw = 0, dynamic_points = 0;
   std::int64_t tracks = 0;
   double track_coverage = 0.0;  // valid (track, time) pairs / all
+  // The flow the tracks followed: "DIS" (computed) or "priors" (the
+  // views' learned flow).
+  std::string track_flow = "DIS";
   int num_bases = 0;
   int canonical_time = 0;
   double voxel_size = 0.0;

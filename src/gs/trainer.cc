@@ -15,6 +15,7 @@
 #include "src/core/npy.h"
 #include "src/core/psnr.h"
 #include "src/gs/loss.h"
+#include "src/gs/prior_loss.h"
 #include "src/gs/surface_loss.h"
 
 namespace pano4d {
@@ -398,9 +399,10 @@ StepReport Trainer::Step() {
                         options_.hidden_thickness, &direct_grads_.means)
             .loss;
   }
+  PriorLosses(view, &report);
   times_.loss += Since(start);
   report.loss = photo.total + report.depth + report.normal + report.hidden +
-                report.appearance;
+                report.appearance + report.flow + report.disparity;
   if (!std::isfinite(report.loss)) {
     ++skipped_steps_total_;
     ++iteration_;
@@ -422,6 +424,7 @@ StepReport Trainer::Step() {
   basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
   const double motion_before = times_.motion;
   Backprop(view.camera, view.time, state_, out_, d_out_, &direct_grads_);
+  PriorBackward();
   strategy_.StepPostBackward(state_, grads_);
 
   if (extra_view) {
@@ -498,6 +501,52 @@ StepReport Trainer::Step() {
   strategy_.StepPostOptimise(iteration_, Optimised(), &rng_);
   times_.densify += Since(start);
   return report;
+}
+
+void Trainer::PriorLosses(const TrainingView& view, StepReport* report) {
+  flow_backward_.clear();
+  if (options_.disparity_weight > 0 && !view.disparity.empty()) {
+    if (d_out_.depth.empty()) d_out_.depth.assign(out_.depth.size(), 0.0f);
+    report->disparity = DisparityLoss(view.disparity, out_.depth,
+                                      options_.disparity_weight, &d_out_.depth)
+                            .loss;
+  }
+  const std::size_t nd = scene_.dynamics.size();
+  if (options_.flow_weight <= 0 || view.flows.empty() || nd == 0) return;
+  if (direct_grads_.means.empty())
+    direct_grads_.means.assign(composed_.means.size(), 0.0f);
+  flow_posed_.sh_degree = scene_.dynamics.sh_degree;
+  flow_posed_.Resize(nd);
+  // The flow term is averaged over the view's flows.
+  const double weight =
+      options_.flow_weight / static_cast<double>(view.flows.size());
+  for (const TrainingView::Flow& f : view.flows) {
+    const TrainingView& other = views_[f.view];
+    PoseDynamicGaussians(scene_.dynamics, scene_.logits, scene_.bases,
+                         other.time, 0, &flow_posed_);
+    FlowBackward& back = flow_backward_.emplace_back();
+    back.time = other.time;
+    back.d_means.assign(nd * 3, 0.0f);
+    report->flow +=
+        FlowLoss(composed_, scene_.statics.size(), flow_posed_.means,
+                 view.camera, other.camera, f.flow, f.valid, out_.depth,
+                 weight, options_.flow_tolerance, options_.flow_huber_pixels,
+                 &direct_grads_.means, &back.d_means)
+            .loss;
+  }
+}
+
+void Trainer::PriorBackward() {
+  if (flow_backward_.empty()) return;
+  const auto start = Clock::now();
+  flow_zero_quats_.assign(scene_.dynamics.size() * 4, 0.0f);
+  for (const FlowBackward& back : flow_backward_) {
+    PoseDynamicGaussiansBackward(scene_.dynamics, scene_.logits, scene_.bases,
+                                 back.time, 0, back.d_means, flow_zero_quats_,
+                                 &dynamic_grads_.means, &dynamic_grads_.quats,
+                                 &logit_grads_, &basis_grads_);
+  }
+  times_.motion += Since(start);
 }
 
 std::int64_t Trainer::AddStaticGaussians(const GaussianModel& extra) {

@@ -26,7 +26,8 @@ struct StepReport {
   std::int64_t iteration = 0;  // after the step
   double loss = 0.0;           // total
   double l1 = 0.0, ssim = 0.0, depth = 0.0, smoothness = 0.0, extra = 0.0,
-         anisotropy = 0.0, normal = 0.0, hidden = 0.0, appearance = 0.0;
+         anisotropy = 0.0, normal = 0.0, hidden = 0.0, appearance = 0.0,
+         flow = 0.0, disparity = 0.0;
   double psnr = 0.0;              // of this step's training view
   std::int64_t skipped_rows = 0;  // Gaussians with non-finite gradients
   bool skipped_step = false;      // the loss itself was not finite
@@ -151,6 +152,13 @@ class Trainer : public SceneEditor {
     return {&scene_, &static_adam_, &dynamic_adam_};
   }
   void UpdateLearningRates();
+  // The learned priors' losses on the training view's render (prior_loss.h):
+  // disparity into d_out_.depth; flow into direct_grads_.means for this
+  // time and into flow_backward_ for the flows' other times.
+  void PriorLosses(const TrainingView& view, StepReport* report);
+  // The flow loss' gradients at the other times, through the motion bases
+  // into the dynamic and basis gradients.
+  void PriorBackward();
   // Rasterizer backward of the forward that left `state` and `out` (the
   // composed model's at `camera`), plus (when `direct` is given) the
   // gradients that losses computed directly on the composed Gaussians,
@@ -200,6 +208,15 @@ class Trainer : public SceneEditor {
   GaussianGradients static_grads_, dynamic_grads_;
   std::vector<float> logit_grads_;
   MotionBases basis_grads_;
+  // The flow loss' other times: the dynamic Gaussians posed there, and
+  // the gradients of their means.
+  struct FlowBackward {
+    int time = 0;
+    std::vector<float> d_means;
+  };
+  std::vector<FlowBackward> flow_backward_;
+  GaussianModel flow_posed_;
+  std::vector<float> flow_zero_quats_;
 
   PhaseTimes times_;
   std::int64_t skipped_rows_total_ = 0, skipped_steps_total_ = 0;

@@ -33,6 +33,10 @@ void TrainerOptions::Check() const {
   non_negative(hidden_thickness, "hidden_thickness");
   non_negative(appearance_weight, "appearance_weight");
   positive(normal_tolerance, "normal_tolerance");
+  non_negative(flow_weight, "flow_weight");
+  positive(flow_tolerance, "flow_tolerance");
+  positive(flow_huber_pixels, "flow_huber_pixels");
+  non_negative(disparity_weight, "disparity_weight");
   if (!(max_anisotropy >= 1)) {
     throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
                 "must be at least 1");
@@ -68,6 +72,10 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"normal_tolerance", normal_tolerance},
           {"hidden_weight", hidden_weight},
           {"hidden_thickness", hidden_thickness},
+          {"flow_weight", flow_weight},
+          {"flow_tolerance", flow_tolerance},
+          {"flow_huber_pixels", flow_huber_pixels},
+          {"disparity_weight", disparity_weight},
           {"appearance", appearance},
           {"appearance_weight", appearance_weight},
           {"lr_appearance", lr_appearance},

@@ -49,6 +49,17 @@ struct TrainerOptions {
   // (docs/experiments/2026-11-22-hidden-depth-term.md).
   double hidden_weight = 1.0;
   double hidden_thickness = 0.1;
+  // Learned priors (prior_loss.h), on the views that carry them (--priors):
+  // flow_weight times the mean Huber distance (flow_huber_pixels), over
+  // the dynamic Gaussians on a view's rendered surface (centre within
+  // flow_tolerance, relative, of its depth), between where the Gaussian
+  // lands in the flow's other view and where the flow says, in units of
+  // the image width; disparity_weight times the scale- and shift-invariant
+  // error of the rendered inverse depth against the view's disparity.
+  double flow_weight = 1.0;
+  double flow_tolerance = 0.05;
+  double flow_huber_pixels = 2.0;
+  double disparity_weight = 0.0;
   // Per-frame appearance (appearance.h): an affine colour transform per
   // training frame applied to its render before the loss, learned at
   // lr_appearance and held near the identity by appearance_weight x

@@ -22,6 +22,7 @@
 #include "src/datasets/depth_map.h"
 #include "src/geometry/depth_alignment.h"
 #include "src/geometry/motion_segmentation.h"
+#include "src/pipeline/priors.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -369,6 +370,149 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
   WriteJson(ws.depth() / "stereo.json", report);
 }
 
+// A learned map whose aligned depth misses the frame's SfM points by more
+// than this (median, relative) is another scene's or a failed network
+// output: the frame keeps its stereo depth, and the report names it.
+constexpr double kMaxLearnedDepthError = 0.1;
+// Learned depth beyond this many times the SfM points' 98th percentile is
+// dropped: a disparity near 0 (the far background) maps to depths an
+// affine fitted on nearer points cannot vouch for.
+constexpr double kMaxLearnedDepthFactor = 4.0;
+
+// The priors' motion masks as the training frames' dynamic masks (written
+// to the workspace's masks folder): in place of those a frame would get
+// (replace, before ComputeMissingMasks) or added to them (join, after).
+void UsePriorMasks(const fs::path& dir, const MaskPrior& prior,
+                   const std::vector<PriorFrame>& video, bool join,
+                   WorkspaceFrames* frames) {
+  std::map<std::string, const cv::Mat*> by_name;
+  for (std::size_t j = 0; j < video.size(); ++j)
+    if (!prior.masks[j].empty()) by_name[video[j].name] = &prior.masks[j];
+  int used = 0;
+  for (WorkspaceFrame& f : frames->train) {
+    const auto it = by_name.find(f.name);
+    if (it == by_name.end()) continue;
+    cv::Mat mask = it->second->clone();
+    if (join && !f.dynamic_mask.empty()) {
+      const cv::Mat own = ReadMask(f.dynamic_mask);
+      CheckSize(own, f.dynamic_mask, f.camera.camera);
+      mask.setTo(kMaskOn, own >= 128);
+    }
+    WriteDynamicMasks({mask}, {f.name + ".png"}, dir);
+    f.dynamic_mask = MaskPathFor(dir, f.name + ".png");
+    ++used;
+  }
+  PANO4D_LOG(kInfo) << "depth: motion masks from " << prior.layout->name
+                    << (join ? " joined to the computed ones" : "") << " for "
+                    << used << " of " << frames->train.size()
+                    << " training frames";
+}
+
+// Each training frame's learned depth, aligned to its SfM points (an affine
+// in inverse depth for disparity, a scale for metric depth), fills the
+// pixels stereo cannot give: the moving ones (stereo matches frames taken
+// at other times) and static ones without stereo support. Without SfM
+// points (one camera centre) metric depth is taken as it is. Writes
+// WS/pano4d/depth/priors.json: per frame the fit, its residual, the pixels
+// filled, or why it failed.
+void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
+                       const DepthPrior& prior,
+                       const std::vector<PriorFrame>& video,
+                       WorkspaceFrames* frames, DepthSummary* summary) {
+  const bool metric = prior.layout->meaning == DepthMeaning::kMetricDepth;
+  if (model.points3D.empty() && !metric) {
+    throw Error(prior.layout->path.string(), "alignment", "no SfM points",
+                "disparity needs sparse points to be aligned to, and this "
+                "model has none (one camera centre); give metric depth");
+  }
+  std::map<std::string, const cv::Mat*> by_name;
+  for (std::size_t j = 0; j < video.size(); ++j)
+    if (!prior.maps[j].empty()) by_name[video[j].name] = &prior.maps[j];
+  std::vector<double> sample_depths;
+  std::vector<std::vector<DepthSample>> samples(frames->train.size());
+  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+    samples[i] = SfmSamples(model, frames->train[i]);
+    for (const DepthSample& s : samples[i]) sample_depths.push_back(s.z);
+  }
+  double max_depth = kMaxPlausibleDepth;
+  if (!sample_depths.empty()) {
+    std::nth_element(sample_depths.begin(),
+                     sample_depths.begin() + sample_depths.size() * 98 / 100,
+                     sample_depths.end());
+    max_depth = kMaxLearnedDepthFactor *
+                sample_depths[sample_depths.size() * 98 / 100];
+  }
+  const DepthModel depth_model =
+      metric ? DepthModel::kScale : DepthModel::kAffineDisparity;
+  nlohmann::json report = nlohmann::json::array();
+  ProgressBar bar("learned depth",
+                  static_cast<std::int64_t>(frames->train.size()));
+  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+    WorkspaceFrame& f = frames->train[i];
+    bar.Add();
+    const auto it = by_name.find(f.name);
+    if (it == by_name.end()) {
+      report.push_back({{"frame", f.name}, {"learned", "no file"}});
+      continue;
+    }
+    const cv::Mat& map = *it->second;
+    nlohmann::json entry = {{"frame", f.name},
+                            {"model", metric ? "scale" : "affine disparity"}};
+    cv::Mat learned;
+    if (model.points3D.empty()) {
+      learned = map.clone();
+      entry["as_given"] = "the model has no points";
+    } else {
+      try {
+        const DepthAlignment a = AlignDepthModel(map, samples[i], depth_model);
+        entry["scale"] = a.scale;
+        entry["shift"] = a.shift;
+        entry["samples"] = a.samples;
+        entry["inliers"] = a.inliers;
+        entry["median_relative_error"] = a.median_relative_error;
+        if (a.median_relative_error > kMaxLearnedDepthError) {
+          throw Error(f.name, "median relative error",
+                      std::to_string(a.median_relative_error),
+                      "above " + std::to_string(kMaxLearnedDepthError) +
+                          ": the learned depth does not fit the SfM points");
+        }
+        learned = ApplyDepthAlignment(map, a, max_depth);
+      } catch (const Error& e) {
+        entry["failed"] = e.what();
+        summary->alignment_failed.push_back(f.name);
+        PANO4D_LOG(kWarning) << "depth: frame " << f.name
+                             << " keeps its stereo depth only: " << e.what();
+        report.push_back(entry);
+        continue;
+      }
+    }
+    cv::Mat depth = f.depth.empty() ? cv::Mat(learned.size(), CV_32F,
+                                              cv::Scalar(0))
+                                    : ReadDepthMap(f.depth);
+    cv::Mat moving;
+    if (!f.dynamic_mask.empty()) moving = ReadMask(f.dynamic_mask) >= 128;
+    int filled_moving = 0, filled_holes = 0;
+    for (int y = 0; y < depth.rows; ++y) {
+      for (int x = 0; x < depth.cols; ++x) {
+        const float z = learned.at<float>(y, x);
+        float& d = depth.at<float>(y, x);
+        const bool is_moving = !moving.empty() && moving.at<std::uint8_t>(y, x);
+        if (!(z > 0) || (d > 0 && !is_moving)) continue;
+        d = z;
+        ++(is_moving ? filled_moving : filled_holes);
+      }
+    }
+    entry["filled_moving_pixels"] = filled_moving;
+    entry["filled_static_pixels"] = filled_holes;
+    f.depth = ws.depth_map(f.name);
+    WriteDepthMap(f.depth, depth);
+    ++summary->with_learned_depth;
+    report.push_back(entry);
+  }
+  bar.Finish();
+  WriteJson(ws.depth() / "priors.json", report);
+}
+
 }  // namespace
 
 void DepthOptions::Check() const {
@@ -391,6 +535,8 @@ void DepthOptions::Check() const {
 nlohmann::json DepthOptions::ToJson() const {
   return {{"dataset", dataset.string()},
           {"depth_dir", depth_dir.string()},
+          {"priors", priors.string()},
+          {"prior_masks_join", prior_masks_join},
           {"factor", factor},
           {"holdout", holdout},
           {"stereo_long_side", stereo_long_side},
@@ -407,11 +553,21 @@ nlohmann::json DepthOptions::ToJson() const {
 }
 
 std::string DepthSummary::BriefReport() const {
-  return StringPrintf(
+  std::string text = StringPrintf(
       "%zu training frames (%d with depth), %zu validation frames, %d times, "
       "depth from %s",
       frames.train.size(), with_depth, frames.val.size(), frames.num_times,
       frames.depth_source.c_str());
+  if (with_learned_depth > 0 || !alignment_failed.empty()) {
+    text += StringPrintf("; learned depth in %d frames", with_learned_depth);
+    if (!alignment_failed.empty()) {
+      text += ", not aligned in " + std::to_string(alignment_failed.size()) +
+              " (" + alignment_failed.front() +
+              (alignment_failed.size() > 1 ? ", ..." : "") +
+              "; WS/pano4d/depth/priors.json says why)";
+    }
+  }
+  return text;
 }
 
 StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
@@ -425,6 +581,7 @@ StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
   }
   if (!o.depth_dir.empty())
     as_used.depth_dir = fs::weakly_canonical(o.depth_dir);
+  if (!o.priors.empty()) as_used.priors = fs::weakly_canonical(o.priors);
   in.Option("depth", as_used.ToJson());
   if (!o.dataset.empty()) in.File(o.dataset);
   // The model of `pano4d sfm` (or an adopted COLMAP workspace), whose
@@ -440,6 +597,7 @@ StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
   in.File(ws.dynamic_masks());
   in.File(ws.undistorted_dynamic_masks());
   if (!o.depth_dir.empty()) in.File(o.depth_dir);
+  if (!o.priors.empty()) in.File(o.priors);
   // Its outputs: one removed or edited by hand is noticed.
   in.File(ws.frames_json());
   in.File(ws.depth());
@@ -454,6 +612,25 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   DepthSummary summary;
   WorkspaceFrames& frames = summary.frames;
   ColmapModel model;
+  // The priors folder is read first: a layout it does not hold is an error
+  // before any work.
+  std::optional<PriorsFolder> priors;
+  if (!o.priors.empty()) priors = ScanPriors(o.priors);
+  std::vector<PriorFrame> video;
+  std::optional<MaskPrior> prior_masks;
+  // Reads the priors' masks for the frames listed so far and, unless they
+  // join the computed ones, uses them before those are computed.
+  const auto masks_before = [&](const fs::path& dir) {
+    if (!priors) return;
+    video = PriorVideoFrames(ws, frames);
+    prior_masks = ReadMaskPrior(*priors, video);
+    if (prior_masks && !o.prior_masks_join)
+      UsePriorMasks(dir, *prior_masks, video, false, &frames);
+  };
+  const auto masks_after = [&](const fs::path& dir) {
+    if (prior_masks && o.prior_masks_join)
+      UsePriorMasks(dir, *prior_masks, video, true, &frames);
+  };
   if (!o.dataset.empty()) {
     const Dataset ds = LoadDataset(o.dataset, o.factor);
     const std::string source = DepthSourceFor(HasDepth(ds), o.depth_dir);
@@ -465,19 +642,31 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
     }
     frames = FramesFromDataset(ws, o, ds, source == kDepthFromDataset);
     frames.depth_source = source;
+    masks_before(ws.dynamic_masks());
     ComputeMissingMasks(ws.dynamic_masks(), &frames.train);
+    masks_after(ws.dynamic_masks());
   } else {
     frames = FramesFromWorkspace(ws, o, &model);
     frames.depth_source = DepthSourceFor(false, o.depth_dir);
     // Masks first: stereo leaves moving pixels without depth. The masks of
     // `pano4d sfm` belong to the frames before undistortion; where the
     // undistorted frames differ in size they are computed again on these.
+    masks_before(ws.undistorted_dynamic_masks());
     ComputeMissingMasks(ws.undistorted_dynamic_masks(), &frames.train);
+    masks_after(ws.undistorted_dynamic_masks());
   }
   if (frames.depth_source == kDepthFromStereo)
     StereoDepth(ws, o, model, &frames);
   else if (frames.depth_source == kDepthFromExternal)
     AlignExternalDepth(ws, o, model, &frames);
+  if (priors && frames.depth_source == kDepthFromStereo) {
+    if (const std::optional<DepthPrior> depth = ReadDepthPrior(*priors, video)) {
+      MergeLearnedDepth(ws, model, *depth, video, &frames, &summary);
+      if (summary.with_learned_depth > 0)
+        frames.depth_source = kDepthFromPriors;
+    }
+  }
+  frames.priors = o.priors.empty() ? fs::path() : fs::absolute(o.priors);
   frames.depth_options = o.ToJson();
   WriteWorkspaceFrames(ws.root(), frames);
   for (const WorkspaceFrame& f : frames.train)

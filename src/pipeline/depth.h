@@ -27,6 +27,12 @@ namespace pano4d {
 struct DepthOptions {
   std::filesystem::path dataset;    // empty: the workspace's COLMAP model
   std::filesystem::path depth_dir;  // <frame>.npy/.png/.tiff/.exr; empty: none
+  // Learned priors (src/datasets/priors.h; empty: none): their depth,
+  // aligned to the SfM points per frame, gives the moving pixels and the
+  // static pixels stereo leaves without depth their depth; their motion
+  // masks replace the computed ones (or join them, prior_masks_join).
+  std::filesystem::path priors;
+  bool prior_masks_join = false;
   int factor = kProtocolFactor;     // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side
@@ -41,6 +47,11 @@ struct DepthOptions {
 struct DepthSummary {
   WorkspaceFrames frames;  // as written to frames.json
   int with_depth = 0;      // training frames with a depth map
+  // Training frames whose depth took learned depth, and those whose
+  // learned depth could not be aligned (WS/pano4d/depth/priors.json says
+  // why).
+  int with_learned_depth = 0;
+  std::vector<std::string> alignment_failed;
   std::string BriefReport() const;
 };
 

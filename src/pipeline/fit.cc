@@ -20,6 +20,7 @@
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/eval.h"
 #include "src/pipeline/expansion_outputs.h"
+#include "src/pipeline/priors.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -216,13 +217,20 @@ void Summarise(const Trainer& trainer, const ExpansionState& ex,
 
 }  // namespace
 
-FitInputs LoadFitInputs(const Workspace& ws) {
+FitInputs LoadFitInputs(const Workspace& ws, const fs::path& priors) {
   FitInputs inputs;
   WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
   PANO4D_LOG(kInfo) << "fit: " << frames.train.size() << " training and "
                     << frames.val.size() << " validation frames ("
                     << frames.source << ")";
   inputs.train = LoadTrainingViews(frames.train);
+  const fs::path priors_dir = priors.empty() ? frames.priors : priors;
+  if (!priors_dir.empty()) {
+    inputs.priors =
+        AttachPriors(ScanPriors(priors_dir), PriorVideoFrames(ws, frames),
+                     frames, &inputs.train);
+    inputs.priors["root"] = fs::absolute(priors_dir).string();
+  }
   inputs.val = LoadValidation(frames.val);
   inputs.num_times = frames.num_times;
   inputs.depth_source = frames.depth_source;
@@ -350,6 +358,7 @@ FitSummary FitController::Run() {
   summary.given = given_;
   summary.used = o;
   summary.depth_source = inputs_.depth_source;
+  summary.priors = inputs_.priors;
   summary.workspace = ws;
   summary.train_frames = inputs_.train.size();
   summary.val_frames = inputs_.val.size();
@@ -507,7 +516,9 @@ FitSummary FitController::Run() {
 
 FitSummary RunFit(const Workspace& workspace, const FitOptions& options) {
   options.Check();
-  return FitController(workspace, options, LoadFitInputs(workspace)).Run();
+  return FitController(workspace, options,
+                       LoadFitInputs(workspace, options.priors))
+      .Run();
 }
 
 }  // namespace pano4d

@@ -52,12 +52,17 @@ struct FitInputs {
   // frames.json, when the inputs came from it: the final validation renders
   // are then scored with `pano4d eval`'s code against its dataset.
   std::optional<WorkspaceFrames> frames;
+  // The learned priors attached to the training views (AttachPriors'
+  // report; null without priors).
+  nlohmann::json priors;
 };
 
-// The inputs of WS/pano4d/frames.json. Throws pano4d::Error naming a
-// missing or mismatched file (and `pano4d depth` when frames.json is
-// missing).
-FitInputs LoadFitInputs(const Workspace& workspace);
+// The inputs of WS/pano4d/frames.json, with the flow and disparity of
+// `priors` (empty: the folder frames.json names, if any). Throws
+// pano4d::Error naming a missing or mismatched file (and `pano4d depth`
+// when frames.json is missing).
+FitInputs LoadFitInputs(const Workspace& workspace,
+                        const std::filesystem::path& priors = {});
 
 // The trainer of a fit with `used` options (ResolveFitOptions' result) on
 // `views`, starting from `scene`, its resume fingerprint set: the

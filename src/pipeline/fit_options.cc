@@ -68,6 +68,7 @@ nlohmann::json FitOptions::ToJson() const {
           {"expansion", expansion_json},
           {"prior_cmd", prior_cmd},
           {"prior_timeout", prior_timeout},
+          {"priors", priors.string()},
           {"panorama_width", panorama_width},
           {"iterations", optional(iterations)},
           {"depth_weight", optional(depth_weight)},
@@ -111,7 +112,9 @@ nlohmann::json ResumeFingerprint(const FitOptions& used) {
   nlohmann::json j = used.ToJson();
   for (const char* conduct :
        {"resume", "deterministic", "checkpoint_every", "validate_every",
-        "log_every", "time_budget", "panorama_width", "prior_timeout"})
+        "log_every", "time_budget", "panorama_width", "prior_timeout",
+        // What the priors hold is in the views' fingerprint, not where.
+        "priors"})
     j.erase(conduct);
   // Held in trainer, init and expansion as used.
   j.erase("iterations");

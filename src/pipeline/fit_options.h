@@ -8,6 +8,7 @@
 // (fit.h).
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -37,6 +38,10 @@ struct FitOptions {
   // Seconds one clip may take in the prior command before it is stopped
   // and the CPU prior fills the clip (src/pano/prior.h).
   double prior_timeout = kPriorTimeoutSeconds;
+  // Learned priors (src/datasets/priors.h): the flow and disparity of the
+  // training frames, for the motion's initial tracks and the prior losses.
+  // Empty: the folder the depth stage read (frames.json), if any.
+  std::filesystem::path priors;
   // Width of the equirectangular panoramas in WS/pano4d/panorama (height
   // half of it).
   int panorama_width = 1024;

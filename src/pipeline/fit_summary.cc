@@ -125,6 +125,7 @@ nlohmann::json FitSummary::ToJson() const {
       {"deterministic", used.deterministic},
       {"seed", used.seed},
       {"depth_source", depth_source},
+      {"priors", priors},
       {"static_gaussians", static_gaussians},
       {"dynamic_gaussians", dynamic_gaussians},
       {"motion_bases", motion_bases},

@@ -38,6 +38,7 @@ struct FitSummary {
   // unset and used.depth_weight 5 on a dataset's depth, say.
   FitOptions given, used;
   std::string depth_source;  // frames.json's, which chose the used defaults
+  nlohmann::json priors;     // the learned priors used (FitInputs::priors)
   Workspace workspace;
 
   std::int64_t iterations = 0;  // done, in all

@@ -361,10 +361,11 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
 
   stage("fit", [&] {
     FitOptions f = o.fit;
+    f.priors = o.depth.priors;
     if (!plan.Runs("motion")) f.init.num_bases = 0;
     if (!plan.Runs("expansion")) f.expand = false;
     const FitOptions used = ResolveFitOptions(f, FitInputOf(frames));
-    FitInputs inputs = LoadFitInputs(ws);
+    FitInputs inputs = LoadFitInputs(ws, f.priors);
     std::optional<std::string> mismatch =
         depth_ran ? std::optional<std::string>("the depth stage ran again")
                   : CheckpointMismatch(ws, used, inputs.train);

@@ -79,5 +79,44 @@ TEST(DepthAlignmentTest, DegenerateInputsAreErrors) {
   EXPECT_THROW(AlignDepth(s.depth, s.samples, {.robust_scale = 0}), Error);
 }
 
+// A disparity map d = (1 / z - b) / s of the same plane, as a monocular
+// network gives it (an unknown affine in inverse depth), with movers.
+TEST(DepthAlignmentTest, DisparityIsAlignedInInverseDepth) {
+  Scene s = MakeScene(1.0, 0.0, 0.2, 4);
+  const double scale = 0.002, shift = -0.05;
+  cv::Mat disparity(s.depth.size(), CV_32F);
+  for (int v = 0; v < 60; ++v)
+    for (int u = 0; u < 80; ++u)
+      disparity.at<float>(v, u) = static_cast<float>(
+          (1.0 / s.depth.at<float>(v, u) - shift) / scale);
+  const DepthAlignment a =
+      AlignDepthModel(disparity, s.samples, DepthModel::kAffineDisparity);
+  EXPECT_NEAR(a.scale, scale, 0.01 * scale);
+  // Within 1% of the inverse depths (0.17 to 0.5) the plane spans.
+  EXPECT_NEAR(a.shift, shift, 0.003);
+  EXPECT_LT(a.median_relative_error, 0.01);
+  // An affine fit in depth cannot follow 1/z: its error is far larger.
+  const DepthAlignment wrong =
+      AlignDepthModel(disparity, s.samples, DepthModel::kAffineDepth);
+  EXPECT_GT(wrong.median_relative_error, 3 * a.median_relative_error);
+
+  const cv::Mat z = ApplyDepthAlignment(disparity, a, 100.0);
+  EXPECT_NEAR(z.at<float>(30, 40), s.depth.at<float>(30, 40),
+              0.01 * s.depth.at<float>(30, 40));
+  // Beyond max_depth, and where the inverse depth is not positive: none.
+  EXPECT_EQ(ApplyDepthAlignment(disparity, a, 1.0).at<float>(30, 40), 0.0f);
+  cv::Mat far = disparity.clone();
+  far.at<float>(0, 0) = static_cast<float>(-shift / scale - 10);
+  EXPECT_EQ(ApplyDepthAlignment(far, a, 100.0).at<float>(0, 0), 0.0f);
+}
+
+TEST(DepthAlignmentTest, MetricDepthIsAlignedByAScaleAlone) {
+  const Scene s = MakeScene(0.5, 0.0, 0.2, 5);
+  const DepthAlignment a =
+      AlignDepthModel(s.depth, s.samples, DepthModel::kScale);
+  EXPECT_NEAR(a.scale, 0.5, 0.005);
+  EXPECT_EQ(a.shift, 0.0);
+}
+
 }  // namespace
 }  // namespace pano4d

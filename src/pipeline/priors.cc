@@ -1,0 +1,184 @@
+#include "src/pipeline/priors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "src/core/error.h"
+#include "src/core/image.h"
+#include "src/core/log.h"
+#include "src/core/strings.h"
+
+namespace pano4d {
+namespace fs = std::filesystem;
+namespace {
+
+// Image files `pano4d sfm` may have written to WS/images.
+bool IsImage(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
+PriorFrame PriorFrameOf(const WorkspaceFrame& f, bool used) {
+  return {f.name, f.rgb, f.camera.camera.width, f.camera.camera.height, used};
+}
+
+// "a, b, c and 4 more", for logs.
+std::string NameList(const std::vector<std::string>& names) {
+  constexpr std::size_t kShown = 4;
+  std::string text;
+  for (std::size_t i = 0; i < names.size() && i < kShown; ++i)
+    text += (i ? ", " : "") + names[i];
+  if (names.size() > kShown)
+    text += " and " + std::to_string(names.size() - kShown) + " more";
+  return text;
+}
+
+}  // namespace
+
+std::vector<PriorFrame> PriorVideoFrames(const Workspace& ws,
+                                         const WorkspaceFrames& frames) {
+  std::vector<const WorkspaceFrame*> train;
+  for (const WorkspaceFrame& f : frames.train) train.push_back(&f);
+  std::sort(train.begin(), train.end(), [](auto* a, auto* b) {
+    return a->time != b->time ? a->time < b->time
+                              : NaturalLess(a->name, b->name);
+  });
+  std::vector<PriorFrame> video;
+  std::vector<fs::path> images;
+  if (frames.dataset.empty() && fs::is_directory(ws.images())) {
+    for (const fs::directory_entry& e : fs::directory_iterator(ws.images()))
+      if (e.is_regular_file() && IsImage(e.path())) images.push_back(e.path());
+    std::sort(images.begin(), images.end(), [](auto& a, auto& b) {
+      return NaturalLess(a.filename().string(), b.filename().string());
+    });
+  }
+  if (images.empty()) {
+    // A dataset's training frames are its video.
+    for (const WorkspaceFrame* f : train) video.push_back(PriorFrameOf(*f, true));
+    return video;
+  }
+  std::map<std::string, const WorkspaceFrame*> by_file;
+  for (const WorkspaceFrame* f : train)
+    by_file[f->rgb.filename().string()] = f;
+  for (const fs::path& image : images) {
+    const auto it = by_file.find(image.filename().string());
+    if (it != by_file.end()) {
+      video.push_back(PriorFrameOf(*it->second, true));
+      continue;
+    }
+    // Held out or not posed: its files are known, not read.
+    PriorFrame unused = PriorFrameOf(*train.front(), false);
+    unused.name = image.stem().string();
+    unused.image = image;
+    video.push_back(unused);
+  }
+  return video;
+}
+
+nlohmann::json AttachPriors(const PriorsFolder& folder,
+                            const std::vector<PriorFrame>& video,
+                            const WorkspaceFrames& frames,
+                            std::vector<TrainingView>* views) {
+  std::map<std::string, int> view_of;
+  for (std::size_t i = 0; i < frames.train.size(); ++i)
+    view_of[frames.train[i].name] = static_cast<int>(i);
+  // The training view of video frame j, or -1.
+  const auto view_at = [&](int j) {
+    const auto it = view_of.find(video[j].name);
+    return it == view_of.end() || !video[j].used ? -1 : it->second;
+  };
+  nlohmann::json report = nlohmann::json::object();
+  if (const std::optional<DepthPrior> depth = ReadDepthPrior(folder, video)) {
+    std::vector<std::string> without;
+    for (std::size_t j = 0; j < video.size(); ++j) {
+      const int v = view_at(static_cast<int>(j));
+      if (v < 0) continue;
+      const cv::Mat& map = depth->maps[j];
+      if (map.empty()) {
+        without.push_back(video[j].name);
+        continue;
+      }
+      std::vector<float>& out = (*views)[v].disparity;
+      out.assign(map.total(), std::numeric_limits<float>::quiet_NaN());
+      const bool metric =
+          depth->layout->meaning == DepthMeaning::kMetricDepth;
+      for (std::size_t p = 0; p < map.total(); ++p) {
+        const float d = map.ptr<float>()[p];
+        if (!metric) out[p] = d;
+        else if (d > 0) out[p] = 1.0f / d;
+      }
+    }
+    report["disparity"] = {{"layout", depth->layout->name},
+                           {"frames_without", without}};
+    if (!without.empty()) {
+      PANO4D_LOG(kInfo) << "fit: no learned depth for frame(s) "
+                        << NameList(without);
+    }
+  }
+  if (const std::optional<FlowPrior> flow = ReadFlowPrior(folder, video)) {
+    int pairs = 0;
+    std::map<std::string, int> masks;
+    for (const FlowField& field : flow->fields) {
+      const int a = view_at(field.from), b = view_at(field.to);
+      if (a < 0 || b < 0) continue;
+      TrainingView& view = (*views)[a];
+      TrainingView::Flow& f = view.flows.emplace_back();
+      f.view = b;
+      f.flow.assign(field.flow.ptr<float>(),
+                    field.flow.ptr<float>() + field.flow.total() * 2);
+      f.valid.assign(field.valid.ptr<std::uint8_t>(),
+                     field.valid.ptr<std::uint8_t>() + field.valid.total());
+      ++pairs;
+      ++masks[field.mask_source];
+    }
+    std::vector<std::string> without;
+    for (std::size_t i = 0; i < views->size(); ++i)
+      if ((*views)[i].flows.empty()) without.push_back((*views)[i].name);
+    report["flow"] = {{"layout", flow->layout->name},
+                      {"pairs", pairs},
+                      {"masks", masks},
+                      {"frames_without", without}};
+    PANO4D_LOG(kInfo) << "fit: flow from " << flow->layout->name << ": "
+                      << pairs << " pairs of neighbouring training frames"
+                      << (without.empty() ? ""
+                                          : "; none from " + NameList(without));
+  }
+  return report;
+}
+
+std::vector<std::string> DescribePriorUse(const PriorsFolder& folder) {
+  std::vector<std::string> lines;
+  for (const PriorKind kind : {PriorKind::kDepth, PriorKind::kFlow,
+                               PriorKind::kTracks, PriorKind::kMasks}) {
+    const std::vector<const PriorLayout*> layouts = folder.Of(kind);
+    for (std::size_t i = 0; i < layouts.size(); ++i) {
+      const PriorLayout& l = *layouts[i];
+      std::string use;
+      if (i > 0) {
+        use = "not used: " + layouts.front()->name + " is read instead";
+      } else if (kind == PriorKind::kDepth) {
+        use = std::string(l.meaning == DepthMeaning::kMetricDepth
+                              ? "scaled"
+                              : "aligned (affine in inverse depth)") +
+              " to the SfM points per frame: depth of the moving pixels and "
+              "of static pixels without stereo support";
+      } else if (kind == PriorKind::kFlow) {
+        use = "the motion's initial tracks (chained from the canonical "
+              "frame) and the flow loss on the dynamic Gaussians";
+      } else if (kind == PriorKind::kTracks) {
+        use = "not used yet: pano4d's motion starts from flow (issue 56)";
+      } else {
+        use = "the dynamic masks";
+      }
+      lines.push_back(std::string(PriorKindName(kind)) + ": " + l.name + " (" +
+                      std::to_string(l.files) + " file" +
+                      (l.files == 1 ? "" : "s") + "): " + use);
+    }
+  }
+  return lines;
+}
+
+}  // namespace pano4d

@@ -1,0 +1,44 @@
+#pragma once
+
+// What the stages take from a learned priors folder (--priors,
+// src/datasets/priors.h): the video its files name, and for the fit the
+// flow and disparity of each training view. The depth stage's use (aligned
+// depth, masks) is in depth.cc.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/frames.h"
+#include "src/core/workspace.h"
+#include "src/datasets/priors.h"
+#include "src/gs/training_view.h"
+
+namespace pano4d {
+
+// The video the priors were computed on, in time order, at the run's
+// resolution: a dataset's training frames (its own cameras' video); for a
+// COLMAP workspace every frame `pano4d sfm` wrote to WS/images, in the
+// order it numbered them (NaturalLess), those the run does not fit (held
+// out, or left unposed) marked unused.
+std::vector<PriorFrame> PriorVideoFrames(const Workspace& workspace,
+                                         const WorkspaceFrames& frames);
+
+// The priors' flow between neighbouring training views and their
+// disparity, attached to `views` (the training views of `frames`, in its
+// order). Returns what was attached, for fit.json and the log: per kind
+// the layout used, the frames or pairs without, and what was found and
+// not used.
+nlohmann::json AttachPriors(const PriorsFolder& folder,
+                            const std::vector<PriorFrame>& video,
+                            const WorkspaceFrames& frames,
+                            std::vector<TrainingView>* views);
+
+// One line per layout of `folder` and what the run does with it, for the
+// plan and `pano4d dataset info`: "flow: OmniMotion raft_exhaustive/ (22
+// files): flow loss and motion initialisation".
+std::vector<std::string> DescribePriorUse(const PriorsFolder& folder);
+
+}  // namespace pano4d
