@@ -29,7 +29,7 @@ void AddDepthCommand(CLI::App& app, Action* action) {
   AddDatasetOption(sub, &o->depth.dataset);
   AddFactorOption(sub, &o->depth.factor);
   AddDepthDirOption(sub, &o->depth.depth_dir);
-  AddPriorsOptions(sub, &o->depth.priors, &o->depth.prior_masks_join);
+  AddPriorsOptions(sub, &o->depth.priors, &o->depth);
   AddHoldoutOption(sub, &o->depth.holdout);
   sub->footer(
       "Writes WS/pano4d/frames.json, WS/pano4d/depth/<frame>.npy (z-depth, "

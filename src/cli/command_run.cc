@@ -34,7 +34,7 @@ void AddRunCommand(CLI::App& app, Action* action) {
   AddFactorOption(sub, &o->depth.factor);
   AddHoldoutOption(sub, &o->depth.holdout);
   AddDepthDirOption(sub, &o->depth.depth_dir);
-  AddPriorsOptions(sub, &o->depth.priors, &o->depth.prior_masks_join);
+  AddPriorsOptions(sub, &o->depth.priors, &o->depth);
   AddMaxSizeOption(sub, &o->sfm.max_size);
   sub->add_option("--min-posed", o->min_posed,
                   "Stop after sfm when COLMAP poses fewer than this share of "

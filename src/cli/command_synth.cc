@@ -43,6 +43,14 @@ void AddSynthCommand(CLI::App& app, Action* action) {
                 "arc), object sizes, texture scale and an object close to a "
                 "validation camera: scenes the default settings were not "
                 "tuned on");
+  sub->add_flag("--priors", o->synth.priors,
+                "Also write learned-like priors of the training frames at "
+                "1x, as the tools write them: MiDaS-like disparity "
+                "(disp/<frame>.npy: an unknown affine per frame, a smooth "
+                "error of a few percent, blurred edges) and RAFT-like flow "
+                "between neighbouring frames (raft_exhaustive/: sub-pixel "
+                "noise, blurred motion boundaries); `--priors SCENE` reads "
+                "them");
   sub->add_option_function<std::string>(
          "--trajectory",
          [o](const std::string& name) {

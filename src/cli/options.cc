@@ -286,7 +286,7 @@ void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir) {
 }
 
 void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
-                      bool* masks_join) {
+                      DepthOptions* depth) {
   app->add_option("--priors", *priors,
                   "Learned priors as the tools wrote them (MiDaS / Depth "
                   "Anything / UniDepth disparity, metric depth, RAFT flow, "
@@ -296,10 +296,17 @@ void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
                   "has none, the motion's tracks, a flow loss; `pano4d "
                   "dataset info DIR` lists what a folder holds")
       ->check(CLI::ExistingDirectory);
-  if (masks_join) {
-    app->add_flag("--prior-masks-join", *masks_join,
+  if (depth) {
+    app->add_flag("--prior-masks-join", depth->prior_masks_join,
                   "Add the priors' motion masks to the computed ones instead "
                   "of replacing them");
+    app->add_option("--learned-depth-smoothing",
+                    depth->learned_depth_smoothing,
+                    "Correct the learned depth locally towards stereo: a "
+                    "Gaussian of this fraction of the frame's width (0: one "
+                    "affine per frame only)")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
   }
 }
 

@@ -12,6 +12,7 @@
 #include "src/gs/init.h"
 #include "src/gs/trainer.h"
 #include "src/pano/expansion.h"
+#include "src/pipeline/depth.h"
 #include "src/pipeline/fit_options.h"
 
 namespace CLI {
@@ -77,7 +78,7 @@ void AddDepthDirOption(CLI::App* app, std::filesystem::path* depth_dir);
 // --priors: a folder of learned priors (src/datasets/priors.h); with
 // `masks_join`, --prior-masks-join too (the depth stage's).
 void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
-                      bool* masks_join = nullptr);
+                      DepthOptions* depth = nullptr);
 // Video or images: the longest side frames are resized to (--max-size).
 void AddMaxSizeOption(CLI::App* app, int* max_size);
 // The synthetic scene's preset (--preset tiny|small|medium).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -122,9 +123,18 @@ class FrameKeys {
       }
     }
   }
-  // -1 when `key` names no frame.
+  // -1 when `key` names no frame. A key with an image extension also
+  // names the frame of its stem: priors computed on 00000.jpg belong to
+  // the frame pano4d wrote as 00000.png.
   int Find(const std::string& key) const {
-    const auto it = index_.find(key);
+    auto it = index_.find(key);
+    if (it == index_.end()) {
+      const fs::path p(key);
+      std::string ext = p.extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
+        it = index_.find(p.stem().string());
+    }
     return it == index_.end() ? -1 : it->second;
   }
   // "000.png, 001.png, 002.png, ..." for errors.
@@ -266,10 +276,26 @@ RawFlow ReadFlowFile(const PriorLayout& layout, const fs::path& file, int from,
   RawFlow raw{from, to, file, {}, {}};
   if (file.extension() == ".npy") {
     raw.flow = MatFromNpy(ReadNpy(file), 2, file);
+    // OmniMotion's filter_raft.py: raft_masks/<a>_<b>.png beside the flow,
+    // red 255 where the flow is cycle-consistent.
+    const fs::path mask = layout.path.parent_path() / "raft_masks" /
+                          (file.stem().string() + ".png");
+    if (fs::exists(mask)) {
+      const cv::Mat image = cv::imread(mask.string(), cv::IMREAD_COLOR);
+      if (image.size() != raw.flow.size()) {
+        throw Error(mask.string(), "size", SizeText(image.cols, image.rows),
+                    "differs from its flow's " +
+                        SizeText(raw.flow.cols, raw.flow.rows));
+      }
+      cv::Mat red;
+      cv::extractChannel(image, red, 2);
+      raw.mask = red > 0;
+    }
     return raw;
   }
   const NpzArrays arrays = ReadNpz(file);
   raw.flow = MatFromNpy(NpzArray(arrays, "flow", file.string()), 2, file);
+  (void)layout;
   if (arrays.count("mask")) {
     const cv::Mat m = MatFromNpy(arrays.at("mask"), 1, file);
     if (m.size() != raw.flow.size()) {
@@ -279,7 +305,6 @@ RawFlow ReadFlowFile(const PriorLayout& layout, const fs::path& file, int from,
     }
     raw.mask = m > 0.5f;
   }
-  (void)layout;
   return raw;
 }
 
@@ -459,8 +484,12 @@ std::optional<DepthPrior> ReadDepthPrior(const PriorsFolder& folder,
                               : ".npy";
   for (const auto& [i, file] : PerFrameFiles(layout, ext, keys)) {
     if (!frames[i].used) continue;
-    const cv::Mat map = ReadDepthFile(layout, file);
+    cv::Mat map = ReadDepthFile(layout, file);
     CheckFinite(map, file);
+    // Disparity of 0 or below is none (Shape of Motion's aligned maps mark
+    // invalid pixels 0); metric depth keeps its 0 = none.
+    if (layout.meaning == DepthMeaning::kDisparity)
+      map.setTo(std::numeric_limits<float>::quiet_NaN(), map <= 0.0f);
     CheckAspect(map.cols, map.rows, frames[i], file);
     prior.source_width = map.cols;
     prior.source_height = map.rows;
@@ -618,11 +647,13 @@ std::optional<TrackPrior> ReadTrackPrior(const PriorsFolder& folder,
   if (ts.size() == 4 && ts[0] == 1) ts.erase(ts.begin());
   if (vs.size() == 3 && vs[0] == 1) vs.erase(vs.begin());
   if (vs.size() == 3 && vs[2] == 1) vs.pop_back();
-  if (ts.size() != 3 || ts[2] != 2 || vs.size() != 2 || vs[0] != ts[0] ||
-      vs[1] != ts[1]) {
+  // SpaTracker's (T, N, 3) carries a depth after x, y.
+  if (ts.size() != 3 || (ts[2] != 2 && ts[2] != 3) || vs.size() != 2 ||
+      vs[0] != ts[0] || vs[1] != ts[1]) {
     throw Error(file.string(), "shape", "",
                 "expected tracks (T, N, 2) and visibility (T, N)");
   }
+  const std::int64_t stride = ts[2];
   if (ts[0] != n_frames) {
     throw Error(file.string(), "frames", std::to_string(ts[0]),
                 "tracks over another number of frames than the video's " +
@@ -637,7 +668,7 @@ std::optional<TrackPrior> ReadTrackPrior(const PriorsFolder& folder,
   for (std::int64_t k = 0; k < n; ++k) {
     add([&](int t, Eigen::Vector2f* p) {
       const std::size_t i = static_cast<std::size_t>(t * n + k);
-      *p = Eigen::Vector2f(xy[i * 2], xy[i * 2 + 1]);
+      *p = Eigen::Vector2f(xy[i * stride], xy[i * stride + 1]);
       return vis[i] > 0.5f;
     });
   }

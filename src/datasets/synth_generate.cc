@@ -10,6 +10,7 @@
 #include "src/core/timer.h"
 #include "src/datasets/dycheck_dataset.h"
 #include "src/datasets/synth_cameras.h"
+#include "src/datasets/synth_priors.h"
 #include "src/datasets/synth_render.h"
 
 namespace pano4d::synth {
@@ -109,6 +110,7 @@ Json SynthSummary::ToJson() const {
     j["varied"] = true;
     j["layout"] = layout;
   }
+  if (priors) j["priors"] = PriorErrorModel().ToJson();
   return j;
 }
 
@@ -126,6 +128,7 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
   summary.dynamic_scale = options.dynamic_scale;
   summary.varied = options.varied;
   summary.trajectory = options.trajectory;
+  summary.priors = options.priors;
   EnsureDirectory(out);
   // A rerun replaces everything, so a stale marker must not survive a kill.
   fs::remove(out / "synth.json");
@@ -200,6 +203,15 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
           ? static_cast<double>(summary.unseen_pixels) / summary.val_pixels
           : 0;
 
+  if (options.priors) {
+    Timer priors_timer;
+    std::vector<PriorFrameSource> sources;
+    for (int t = 0; t < train_frames; ++t)
+      sources.push_back({train_cameras[t], TimeOf(t, train_frames),
+                         DyCheckFrameId(0, t)});
+    WriteSynthPriors(scene, sources, options.seed, PriorErrorModel(), out);
+    summary.write_seconds += priors_timer.WallSeconds();
+  }
   WriteDyCheckMetadata(out, dycheck);
   WriteJson(out / "synth.json", summary.ToJson());
   return summary;

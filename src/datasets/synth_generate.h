@@ -34,6 +34,9 @@ struct SynthOptions {
   // How the training camera moves (synth_cameras.h): the arc, or a case
   // SfM finds hard (slow arc, pan, static camera).
   TrainingMotion trajectory = TrainingMotion::kArc;
+  // Also write learned-like priors of the training frames (synth_priors.h):
+  // disparity in disp/, flow in raft_exhaustive/.
+  bool priors = false;
 };
 
 // What was generated. Written to synth.json without the timings, so the
@@ -45,6 +48,7 @@ struct SynthSummary {
   double dynamic_scale = 1.0;
   bool varied = false;
   TrainingMotion trajectory = TrainingMotion::kArc;
+  bool priors = false;
   nlohmann::json layout;           // Layout::ToJson of a varied scene
   std::int64_t val_pixels = 0;     // 2x validation pixels with a surface
   std::int64_t unseen_pixels = 0;  // of those, not covisible

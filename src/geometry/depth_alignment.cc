@@ -5,6 +5,7 @@
 #include <string>
 
 #include <ceres/ceres.h>
+#include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
 #include "src/core/median.h"
@@ -182,6 +183,39 @@ cv::Mat ApplyDepthAlignment(const cv::Mat& map, const DepthAlignment& a,
     }
   }
   return z;
+}
+
+cv::Mat CorrectDepthLocally(const cv::Mat& depth, const cv::Mat& reference,
+                            const cv::Mat& trusted, double sigma) {
+  if (depth.size() != reference.size() || depth.size() != trusted.size()) {
+    throw Error("local depth correction", "sizes", "",
+                "the depth, reference and trusted maps differ in size");
+  }
+  cv::Mat weight(depth.size(), CV_32F, cv::Scalar(0));
+  cv::Mat value(depth.size(), CV_32F, cv::Scalar(0));
+  for (int y = 0; y < depth.rows; ++y) {
+    for (int x = 0; x < depth.cols; ++x) {
+      const float d = depth.at<float>(y, x), r = reference.at<float>(y, x);
+      if (!trusted.at<std::uint8_t>(y, x) || !(d > 0) || !(r > 0)) continue;
+      weight.at<float>(y, x) = 1.0f;
+      value.at<float>(y, x) = static_cast<float>(
+          std::clamp(std::log(double(r) / d), -kMaxLocalCorrection,
+                     kMaxLocalCorrection));
+    }
+  }
+  cv::GaussianBlur(weight, weight, cv::Size(), sigma);
+  cv::GaussianBlur(value, value, cv::Size(), sigma);
+  cv::Mat out = depth.clone();
+  for (int y = 0; y < depth.rows; ++y) {
+    for (int x = 0; x < depth.cols; ++x) {
+      float& d = out.at<float>(y, x);
+      if (!(d > 0)) continue;
+      const float w = std::max(weight.at<float>(y, x),
+                               static_cast<float>(kMinLocalSupport));
+      d *= std::exp(value.at<float>(y, x) / w);
+    }
+  }
+  return out;
 }
 
 }  // namespace pano4d

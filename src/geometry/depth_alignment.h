@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -65,5 +66,20 @@ DepthAlignment AlignDepthModel(const cv::Mat& map,
 // background, whose depth an affine fit on nearer points cannot say).
 cv::Mat ApplyDepthAlignment(const cv::Mat& map, const DepthAlignment& a,
                             double max_depth);
+
+// `depth` (a learned map already aligned) corrected towards `reference`
+// (stereo) by a smooth factor: the log of reference / depth over the pixels
+// where `trusted` is set and both have depth, clamped to
+// +-kMaxLocalCorrection, spread by a Gaussian of `sigma` pixels normalised
+// by the trusted pixels' weight (the weight floored at kMinLocalSupport, so
+// that far from any trusted pixel the factor fades to 1). A monocular
+// network's disparity is an affine of inverse depth only roughly (MiDaS on
+// Balloon1: 5-19% median error after the best affine per frame); its
+// errors are smooth, so a moving object takes the correction of the static
+// surfaces around it.
+inline constexpr double kMaxLocalCorrection = 0.4;  // log: x1.5
+inline constexpr double kMinLocalSupport = 0.05;
+cv::Mat CorrectDepthLocally(const cv::Mat& depth, const cv::Mat& reference,
+                            const cv::Mat& trusted, double sigma);
 
 }  // namespace pano4d

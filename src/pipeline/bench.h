@@ -71,6 +71,9 @@ struct BenchDatasetsOptions {
   std::vector<std::string> scenes;  // folder names; empty: every scene found
   int iterations = 0;               // 0: run's default
   std::filesystem::path lpips_weights;  // empty: LPIPS reads n/a
+  // Learned priors per scene: priors/<scene>/ (BenchRunCommand); empty:
+  // none.
+  std::filesystem::path priors;
   std::filesystem::path workspace = "pano4d_bench_datasets";  // WS/<scene>
   std::filesystem::path executable;  // pano4d; empty: this process's binary
 };
@@ -104,13 +107,16 @@ std::vector<BenchScene> FindBenchScenes(const std::filesystem::path& root,
                                         const std::vector<std::string>& names);
 
 // `EXE run --dataset SCENE --workspace WS --eval --factor F
-// [--iterations N] [--lpips-weights W]`, at the scene's protocol factor
-// (Kubric-4D 1, the others 2), paths absolute. Throws pano4d::Error when
-// the scene cannot be read.
+// [--iterations N] [--lpips-weights W] [--priors P]`, at the scene's
+// protocol factor (Kubric-4D 1, the others 2), paths absolute; P is
+// priors_root/<scene> when that folder holds learned priors (a root of
+// scene folders that carry their own priors may be the data root itself).
+// Throws pano4d::Error when the scene cannot be read.
 std::vector<std::string> BenchRunCommand(
     const std::filesystem::path& executable, const BenchScene& scene,
     const std::filesystem::path& workspace, int iterations,
-    const std::filesystem::path& lpips_weights);
+    const std::filesystem::path& lpips_weights,
+    const std::filesystem::path& priors_root = {});
 
 // bench datasets' table, which sweep collect writes too: its head, a
 // metric's cell ("-" without a value), a row (the nine metric columns,

@@ -17,6 +17,7 @@
 #include "src/datasets/dycheck_dataset.h"
 #include "src/datasets/kubric_dataset.h"
 #include "src/datasets/nvidia_dataset.h"
+#include "src/datasets/priors.h"
 #include "src/pipeline/bench.h"
 #include "src/pipeline/eval.h"
 
@@ -64,7 +65,8 @@ std::vector<std::string> BenchRunCommand(const fs::path& executable,
                                          const BenchScene& scene,
                                          const fs::path& workspace,
                                          int iterations,
-                                         const fs::path& lpips_weights) {
+                                         const fs::path& lpips_weights,
+                                         const fs::path& priors_root) {
   // The protocol's factor, written out so that the command says it.
   const int factor = LoadDataset(scene.dir, kProtocolFactor).factor;
   std::vector<std::string> command = {executable.string(),
@@ -84,6 +86,17 @@ std::vector<std::string> BenchRunCommand(const fs::path& executable,
     command.push_back("--lpips-weights");
     command.push_back(fs::absolute(lpips_weights).string());
   }
+  if (!priors_root.empty()) {
+    const fs::path priors = priors_root / scene.dir.filename();
+    try {
+      ScanPriors(priors);
+      command.push_back("--priors");
+      command.push_back(fs::absolute(priors).string());
+    } catch (const Error& e) {
+      PANO4D_LOG(kInfo) << "bench: " << scene.dir.filename().string()
+                        << " runs without learned priors: " << e.what();
+    }
+  }
   return command;
 }
 
@@ -97,7 +110,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   const Workspace ws(o.workspace / e.scene);
   try {
     e.command = BenchRunCommand(executable, {dir, suite}, ws.root(),
-                                o.iterations, o.lpips_weights);
+                                o.iterations, o.lpips_weights, o.priors);
   } catch (const Error& error) {
     e.status = "failed";
     e.error = error.what();

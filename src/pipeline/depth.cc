@@ -372,8 +372,10 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
 
 // A learned map whose aligned depth misses the frame's SfM points by more
 // than this (median, relative) is another scene's or a failed network
-// output: the frame keeps its stereo depth, and the report names it.
-constexpr double kMaxLearnedDepthError = 0.1;
+// output: the frame keeps its stereo depth, and the report names it. MiDaS
+// on Balloon1 misses by 3% to 14% (its disparity is not an exact affine of
+// inverse depth), and is still the only depth its moving pixels have.
+constexpr double kMaxLearnedDepthError = 0.25;
 // Learned depth beyond this many times the SfM points' 98th percentile is
 // dropped: a disparity near 0 (the far background) maps to depths an
 // affine fitted on nearer points cannot vouch for.
@@ -409,14 +411,16 @@ void UsePriorMasks(const fs::path& dir, const MaskPrior& prior,
 }
 
 // Each training frame's learned depth, aligned to its SfM points (an affine
-// in inverse depth for disparity, a scale for metric depth), fills the
-// pixels stereo cannot give: the moving ones (stereo matches frames taken
-// at other times) and static ones without stereo support. Without SfM
-// points (one camera centre) metric depth is taken as it is. Writes
+// in inverse depth for disparity, a scale for metric depth) and corrected
+// locally towards its stereo depth (CorrectDepthLocally, Gaussian of
+// `smoothing` x the frame's width; 0: none), fills the pixels stereo cannot
+// give: the moving ones (stereo matches frames taken at other times) and
+// static ones without stereo support. Without SfM points (one camera
+// centre) metric depth is taken as it is. Writes
 // WS/pano4d/depth/priors.json: per frame the fit, its residual, the pixels
 // filled, or why it failed.
 void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
-                       const DepthPrior& prior,
+                       const DepthPrior& prior, double smoothing,
                        const std::vector<PriorFrame>& video,
                        WorkspaceFrames* frames, DepthSummary* summary) {
   const bool metric = prior.layout->meaning == DepthMeaning::kMetricDepth;
@@ -425,20 +429,22 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
                 "disparity needs sparse points to be aligned to, and this "
                 "model has none (one camera centre); give metric depth");
   }
+  const std::size_t n = frames->train.size();
   std::map<std::string, const cv::Mat*> by_name;
   for (std::size_t j = 0; j < video.size(); ++j)
     if (!prior.maps[j].empty()) by_name[video[j].name] = &prior.maps[j];
+  std::vector<cv::Mat> maps(n);
   std::vector<double> sample_depths;
-  std::vector<std::vector<DepthSample>> samples(frames->train.size());
-  for (std::size_t i = 0; i < frames->train.size(); ++i) {
+  std::vector<std::vector<DepthSample>> samples(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto it = by_name.find(frames->train[i].name);
+    if (it != by_name.end()) maps[i] = *it->second;
     samples[i] = SfmSamples(model, frames->train[i]);
     for (const DepthSample& s : samples[i]) sample_depths.push_back(s.z);
   }
   double max_depth = kMaxPlausibleDepth;
   if (!sample_depths.empty()) {
-    std::nth_element(sample_depths.begin(),
-                     sample_depths.begin() + sample_depths.size() * 98 / 100,
-                     sample_depths.end());
+    std::sort(sample_depths.begin(), sample_depths.end());
     max_depth = kMaxLearnedDepthFactor *
                 sample_depths[sample_depths.size() * 98 / 100];
   }
@@ -450,12 +456,11 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
   for (std::size_t i = 0; i < frames->train.size(); ++i) {
     WorkspaceFrame& f = frames->train[i];
     bar.Add();
-    const auto it = by_name.find(f.name);
-    if (it == by_name.end()) {
+    if (maps[i].empty()) {
       report.push_back({{"frame", f.name}, {"learned", "no file"}});
       continue;
     }
-    const cv::Mat& map = *it->second;
+    const cv::Mat& map = maps[i];
     nlohmann::json entry = {{"frame", f.name},
                             {"model", metric ? "scale" : "affine disparity"}};
     cv::Mat learned;
@@ -464,7 +469,8 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
       entry["as_given"] = "the model has no points";
     } else {
       try {
-        const DepthAlignment a = AlignDepthModel(map, samples[i], depth_model);
+        const DepthAlignment a =
+            AlignDepthModel(map, samples[i], depth_model);
         entry["scale"] = a.scale;
         entry["shift"] = a.shift;
         entry["samples"] = a.samples;
@@ -491,6 +497,12 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
                                     : ReadDepthMap(f.depth);
     cv::Mat moving;
     if (!f.dynamic_mask.empty()) moving = ReadMask(f.dynamic_mask) >= 128;
+    if (smoothing > 0 && !f.depth.empty()) {
+      cv::Mat trusted = depth > 0;
+      if (!moving.empty()) trusted.setTo(0, moving);
+      learned = CorrectDepthLocally(learned, depth, trusted,
+                                    smoothing * depth.cols);
+    }
     int filled_moving = 0, filled_holes = 0;
     for (int y = 0; y < depth.rows; ++y) {
       for (int x = 0; x < depth.cols; ++x) {
@@ -537,6 +549,7 @@ nlohmann::json DepthOptions::ToJson() const {
           {"depth_dir", depth_dir.string()},
           {"priors", priors.string()},
           {"prior_masks_join", prior_masks_join},
+          {"learned_depth_smoothing", learned_depth_smoothing},
           {"factor", factor},
           {"holdout", holdout},
           {"stereo_long_side", stereo_long_side},
@@ -661,7 +674,8 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
     AlignExternalDepth(ws, o, model, &frames);
   if (priors && frames.depth_source == kDepthFromStereo) {
     if (const std::optional<DepthPrior> depth = ReadDepthPrior(*priors, video)) {
-      MergeLearnedDepth(ws, model, *depth, video, &frames, &summary);
+      MergeLearnedDepth(ws, model, *depth, o.learned_depth_smoothing, video,
+                        &frames, &summary);
       if (summary.with_learned_depth > 0)
         frames.depth_source = kDepthFromPriors;
     }

@@ -33,6 +33,10 @@ struct DepthOptions {
   // masks replace the computed ones (or join them, prior_masks_join).
   std::filesystem::path priors;
   bool prior_masks_join = false;
+  // The learned depth's local correction towards stereo: a Gaussian of
+  // this fraction of the frame's width (CorrectDepthLocally); 0: the
+  // affine per frame alone.
+  double learned_depth_smoothing = 0.0;
   int factor = kProtocolFactor;     // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side

@@ -76,7 +76,13 @@ StageDecision Depth(const PlanFacts& f) {
               "part of the scene, on " +
               (f.input == InputKind::kDataset ? "the dataset's cameras"
                                               : "the COLMAP poses") +
-              ", checked against the sparse points"};
+              ", checked against the sparse points" +
+              (f.priors_depth
+                   ? "; the learned depth of --priors, aligned to the sparse "
+                     "points per frame, for the moving pixels (stereo "
+                     "matches frames of other times) and where stereo has "
+                     "no support"
+                   : "")};
 }
 
 StageDecision Motion(const PlanFacts& f) {
@@ -190,6 +196,8 @@ nlohmann::json Plan::ToJson() const {
         {"depth_given", facts.depth_given},
         {"depth_dir", facts.depth_dir},
         {"depth_source", facts.depth_source},
+        {"priors_dir", facts.priors_dir},
+        {"priors", facts.priors},
         {"dynamic_fraction", optional(facts.dynamic_fraction)},
         {"target_views", facts.target_views},
         {"unseen_fraction", optional(facts.unseen_fraction)},
@@ -219,6 +227,10 @@ std::string Plan::Table() const {
                   : d.run   ? "run"
                             : "left out");
     out << head << " " << d.why << "\n";
+  }
+  if (!facts.priors_dir.empty()) {
+    out << "  learned priors in " << facts.priors_dir << ":\n";
+    for (const std::string& line : facts.priors) out << "    " << line << "\n";
   }
   return out.str();
 }

@@ -29,6 +29,11 @@ struct PlanFacts {
   bool poses_given = false;  // a COLMAP workspace or a dataset's cameras
   bool depth_given = false;  // a dataset with depth maps for every frame
   std::string depth_dir;     // --depth-dir: another tool's depth maps
+  // --priors: learned priors; each layout found, with its use or why it is
+  // not used (DescribePriorUse), and whether they hold depth.
+  std::string priors_dir;
+  std::vector<std::string> priors;
+  bool priors_depth = false;
   // Where the training depth will come from: kDepthFrom* (frames.h), as
   // DepthSourceFor (depth.h) chooses it from the two above; MakePlan fills
   // it in.

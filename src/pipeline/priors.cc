@@ -149,7 +149,8 @@ nlohmann::json AttachPriors(const PriorsFolder& folder,
   return report;
 }
 
-std::vector<std::string> DescribePriorUse(const PriorsFolder& folder) {
+std::vector<std::string> DescribePriorUse(const PriorsFolder& folder,
+                                          const std::string& depth_instead) {
   std::vector<std::string> lines;
   for (const PriorKind kind : {PriorKind::kDepth, PriorKind::kFlow,
                                PriorKind::kTracks, PriorKind::kMasks}) {
@@ -159,6 +160,9 @@ std::vector<std::string> DescribePriorUse(const PriorsFolder& folder) {
       std::string use;
       if (i > 0) {
         use = "not used: " + layouts.front()->name + " is read instead";
+      } else if (kind == PriorKind::kDepth && !depth_instead.empty()) {
+        use = "its depth not used: the run takes " + depth_instead +
+              "; the disparity loss (--disparity-weight) may use it";
       } else if (kind == PriorKind::kDepth) {
         use = std::string(l.meaning == DepthMeaning::kMetricDepth
                               ? "scaled"

@@ -38,7 +38,10 @@ nlohmann::json AttachPriors(const PriorsFolder& folder,
 
 // One line per layout of `folder` and what the run does with it, for the
 // plan and `pano4d dataset info`: "flow: OmniMotion raft_exhaustive/ (22
-// files): flow loss and motion initialisation".
-std::vector<std::string> DescribePriorUse(const PriorsFolder& folder);
+// files): the motion's initial tracks ...". `depth_instead` names the
+// depth a run takes in place of the priors' ("the dataset's depth maps",
+// "--depth-dir"); empty: the priors' depth is used.
+std::vector<std::string> DescribePriorUse(const PriorsFolder& folder,
+                                          const std::string& depth_instead = {});
 
 }  // namespace pano4d

@@ -24,6 +24,7 @@
 #include "src/pipeline/depth.h"
 #include "src/pipeline/eval.h"
 #include "src/pipeline/fit.h"
+#include "src/pipeline/priors.h"
 #include "src/pipeline/sfm.h"
 
 namespace pano4d {
@@ -201,6 +202,17 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.input_path = (s.video.empty() ? s.images : s.video).string();
   }
   f.depth_dir = o.depth.depth_dir.string();
+  if (!o.depth.priors.empty()) {
+    // Read now: a folder without a known layout stops the run before sfm.
+    const PriorsFolder priors = ScanPriors(o.depth.priors);
+    f.priors_dir = o.depth.priors.string();
+    f.priors_depth = !priors.Of(PriorKind::kDepth).empty() &&
+                     f.depth_dir.empty() && !f.depth_given;
+    f.priors = DescribePriorUse(
+        priors, !f.depth_dir.empty() ? "--depth-dir's maps"
+                : f.depth_given      ? "the dataset's depth maps"
+                                     : "");
+  }
   f.min_posed = o.min_posed;
   // A workspace that an earlier run took through sfm or depth already
   // knows.

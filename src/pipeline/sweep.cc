@@ -90,7 +90,7 @@ Json PlanSweep(const SweepPlanOptions& o) {
         const fs::path ws = out / "ws" / scene.name() /
                             (config + "_seed" + std::to_string(seed));
         std::vector<std::string> command = BenchRunCommand(
-            executable, scene, ws, o.iterations, o.lpips_weights);
+            executable, scene, ws, o.iterations, o.lpips_weights, o.priors);
         command.insert(command.end(), {"--seed", std::to_string(seed)});
         if (o.deterministic) command.push_back("--deterministic");
         for (const std::string& flag : SweepConfigs().at(config))

@@ -37,6 +37,7 @@ struct SweepPlanOptions {
   int iterations = 0;          // 0: run's default schedule
   bool deterministic = false;  // run --deterministic
   std::filesystem::path lpips_weights;
+  std::filesystem::path priors;      // as BenchDatasetsOptions::priors
   std::filesystem::path out;         // SWEEP
   std::filesystem::path executable;  // pano4d; empty: this binary
 };

@@ -146,11 +146,23 @@ TEST(PriorsTest, OmniMotionFlowGetsAForwardBackwardMask) {
   EXPECT_EQ(fwd.valid.at<std::uint8_t>(5, 10), kMaskOn);
   const auto far = ReadFlowPrior(ScanPriors(dir.path()), Frames(), 3);
   EXPECT_EQ(far->fields.size(), 3u);
+
+  // filter_raft.py's raft_masks/: red where cycle-consistent, preferred to
+  // the forward-backward check.
+  cv::Mat mask(kH, kW, CV_8UC3, cv::Scalar(0, 0, 0));
+  mask(cv::Rect(0, 0, 3, kH)).setTo(cv::Scalar(0, 0, 255));  // BGR red
+  std::filesystem::create_directories(dir / "raft_masks");
+  cv::imwrite((dir / "raft_masks" / "000.png_001.png.png").string(), mask);
+  const auto masked = ReadFlowPrior(ScanPriors(dir.path()), Frames());
+  EXPECT_EQ(masked->fields[0].mask_source, "file");
+  EXPECT_EQ(cv::countNonZero(masked->fields[0].valid), 3 * kH);
 }
 
 TEST(PriorsTest, MoScaFloat16FlowMetricDepthTracksAndMasks) {
   const TempDir dir;
-  WriteNpz(dir / "flow_raft" / "00000_to_00001.npz",
+  // raft_wrapper.py names pairs by the images it read (00000.jpg); the
+  // run's frames are 000.png / 00000: the stem names the frame.
+  WriteNpz(dir / "flow_raft" / "00000.jpg_to_00001.jpg.npz",
            {{"flow", ConstantFlow(kW, kH, 0.5f, 0.25f, true)},
             {"mask", BoolMask(kW, kH, true)}},
            true);

@@ -118,5 +118,28 @@ TEST(DepthAlignmentTest, MetricDepthIsAlignedByAScaleAlone) {
   EXPECT_EQ(a.shift, 0.0);
 }
 
+TEST(DepthAlignmentTest, LocalCorrectionFollowsTheReferenceAroundAHole) {
+  // Learned depth 10% too far on the left half, right on the right half;
+  // the reference (stereo) has a hole in the middle of the left half.
+  cv::Mat learned(60, 80, CV_32F), reference(60, 80, CV_32F);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 80; ++x) {
+      reference.at<float>(y, x) = 5.0f;
+      learned.at<float>(y, x) = x < 40 ? 5.5f : 5.0f;
+    }
+  cv::Mat trusted(60, 80, CV_8UC1, cv::Scalar(255));
+  trusted(cv::Rect(10, 20, 15, 20)).setTo(0);  // the moving object
+  const cv::Mat fixed = CorrectDepthLocally(learned, reference, trusted, 6.0);
+  EXPECT_NEAR(fixed.at<float>(30, 17), 5.0f, 0.05f);  // inside the hole
+  EXPECT_NEAR(fixed.at<float>(30, 70), 5.0f, 0.01f);
+  // Nothing trusted: the learned depth as it was.
+  const cv::Mat none = CorrectDepthLocally(
+      learned, reference, cv::Mat(60, 80, CV_8UC1, cv::Scalar(0)), 6.0);
+  EXPECT_EQ(none.at<float>(30, 17), 5.5f);
+  EXPECT_THROW(CorrectDepthLocally(learned, reference(cv::Rect(0, 0, 10, 10)),
+                                   trusted, 6.0),
+               Error);
+}
+
 }  // namespace
 }  // namespace pano4d

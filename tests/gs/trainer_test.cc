@@ -137,6 +137,79 @@ TEST(TrainerTest, MotionBasesLearnAKnownTranslation) {
   }
 }
 
+// Learned flow (TrainingView::flows) carries the motion to the bases: the
+// frames are one flat grey without depth, which say nothing about motion,
+// and the
+// student, grey too, learns the teacher's translation from the flow term
+// alone; without flows its bases stay where they started.
+TEST(TrainerTest, FlowPriorAloneTeachesTheBasesTheMotion) {
+  // Every Gaussian moves up by kStep t; cameras step sideways (a motion
+  // along their baseline could be explained by depth as well).
+  constexpr float kStep = 0.04f;
+  const std::vector<float> offsets = {0.0f, 0.05f, 0.0f, -0.05f};
+  GaussianScene teacher;
+  teacher.num_times = 4;
+  teacher.dynamics = RandomViewFillingScene(400, CameraAt(0), 4.0f, 5);
+  for (float& o : teacher.dynamics.opacities) o = 3.0f;
+  std::fill(teacher.dynamics.sh.begin(), teacher.dynamics.sh.end(), 0.0f);
+  teacher.statics.sh_degree = teacher.dynamics.sh_degree;
+  teacher.bases.Reset(1, 4);
+  for (int t = 0; t < 4; ++t) teacher.bases.translation(0, t)[1] = kStep * t;
+  teacher.logits.assign(teacher.dynamics.size(), 0.0f);
+  std::vector<TrainingView> views = RenderViews(teacher, offsets, {0, 1, 2, 3});
+  for (TrainingView& v : views) std::fill(v.rgb.begin(), v.rgb.end(), 0.5f);
+  std::vector<TrainingView> with_flow = views;
+  // The flow of a point at the rendered depth z: f (moved - camera moved) / z.
+  for (int a = 0; a < 4; ++a) {
+    for (const int b : {a - 1, a + 1}) {
+      if (b < 0 || b > 3) continue;
+      TrainingView::Flow f;
+      f.view = b;
+      f.valid.assign(kWidth * kHeight, 0);
+      f.flow.assign(kWidth * kHeight * 2, 0.0f);
+      for (int p = 0; p < kWidth * kHeight; ++p) {
+        const float z = views[a].depth[p];
+        if (!(z > 0)) continue;
+        f.valid[p] = 255;
+        f.flow[2 * p] = -views[a].camera.fx * (offsets[b] - offsets[a]) / z;
+        f.flow[2 * p + 1] = views[a].camera.fy * kStep * (b - a) / z;
+      }
+      with_flow[a].flows.push_back(std::move(f));
+    }
+  }
+  // Nor any depth: its changes over time would teach the motion too.
+  for (auto* list : {&views, &with_flow})
+    for (TrainingView& v : *list) v.depth.clear();
+  GaussianScene student = teacher;
+  student.bases.Reset(1, 4);
+  TrainerOptions options = FastOptions(300);
+  options.smoothness_weight = 0;
+  // Room to travel the whole way in 300 steps: without depth the scene's
+  // extent, which scales the rate, is the cameras' spread (0.055).
+  options.lr_basis_translation = 0.1;
+  // The mean error of the learned translations; the flow term's sum.
+  double flow_loss = 0;
+  const auto motion_error = [&](std::vector<TrainingView> v) {
+    Trainer trainer(student, std::move(v), options, /*seed=*/0);
+    flow_loss = 0;
+    while (!trainer.Done()) flow_loss += trainer.Step().flow;
+    const float y0 = trainer.scene().bases.translation(0, 0)[1];
+    double error = 0;
+    for (int t = 1; t < 4; ++t)
+      error += std::abs(trainer.scene().bases.translation(0, t)[1] - y0 -
+                        kStep * t);
+    return error / 3;
+  };
+  const double without = motion_error(views);  // no flows attached
+  EXPECT_EQ(flow_loss, 0.0);
+  const double with = motion_error(with_flow);
+  EXPECT_GT(flow_loss, 0.0);
+  EXPECT_GT(without, 0.05);  // about the whole motion, 0.08 on average
+  // Most of the way in 300 steps (the motion spreads from the ends of the
+  // clip inwards: the inner times' flows pull both ways at the start).
+  EXPECT_LT(with, 0.35 * without) << "with " << with << " without " << without;
+}
+
 TEST(TrainerTest, AppearanceExplainsAViewsExposureInsteadOfTheGaussians) {
   // Three views of a static scene; the middle one was exposed 30% darker
   // with a blue cast. With appearance the transforms take the difference:

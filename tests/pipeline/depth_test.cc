@@ -194,6 +194,80 @@ TEST_F(DepthStageTest, ADatasetWithoutDepthGetsStereoOnItsCameras) {
   }
 }
 
+// A dataset without depth, with learned-like priors (synth --priors: MiDaS-
+// like disparity at 1x, twice the run's resolution): the moving pixels get
+// the aligned learned depth, close to the truth; a frame without a
+// disparity file keeps stereo only and is named; given motion masks
+// replace the computed ones.
+TEST_F(DepthStageTest, LearnedDepthFillsMovingPixelsAndStereoHoles) {
+  const fs::path scene = dir_->path() / "tiny_priors";
+  if (!fs::exists(scene)) {
+    synth::SynthOptions so;
+    so.preset = "tiny";
+    so.priors = true;
+    synth::GenerateSynthScene(so, scene);
+    fs::remove_all(scene / "depth");
+  }
+  ASSERT_TRUE(fs::exists(scene / "disp" / "0_00003.npy"));
+  ASSERT_TRUE(fs::exists(scene / "raft_exhaustive" /
+                         "0_00003.png_0_00004.png.npy"));
+  fs::remove(scene / "disp" / "0_00005.npy");
+  // A motion mask for frame 0_00002 only: the whole left half moving.
+  cv::Mat mask(96, 128, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(0, 0, 64, 96)).setTo(255);
+  WriteMask(scene / "motion_masks" / "0_00002.png", mask);
+
+  const Workspace ws = ColmapWorkspace("learned_depth");
+  DepthOptions o;
+  o.dataset = scene;
+  o.factor = 2;
+  o.priors = scene;
+  const DepthSummary s = RunDepth(ws, o);
+  EXPECT_EQ(s.frames.depth_source, kDepthFromPriors);
+  EXPECT_EQ(s.with_learned_depth, 7);
+  EXPECT_TRUE(s.alignment_failed.empty());
+  const Json report = ReadJson(ws.depth() / "priors.json");
+  const Dataset truth = LoadDataset(dir_->path() / "tiny", 2);
+  for (const WorkspaceFrame& f : s.frames.train) {
+    const Json* entry = nullptr;
+    for (const Json& e : report)
+      if (e.at("frame") == f.name) entry = &e;
+    ASSERT_NE(entry, nullptr) << f.name;
+    if (f.name == "0_00005") {
+      EXPECT_EQ(entry->at("learned"), "no file");
+      continue;
+    }
+    EXPECT_LT(entry->at("median_relative_error").get<double>(), 0.1) << *entry;
+    if (f.name == "0_00002") {
+      const cv::Mat m = ReadMask(f.dynamic_mask);
+      EXPECT_EQ(cv::countNonZero(m(cv::Rect(0, 0, 32, 48))), 32 * 48);
+      EXPECT_EQ(cv::countNonZero(m(cv::Rect(32, 0, 32, 48))), 0);
+      continue;
+    }
+    // The moving pixels' depth against the truth.
+    const cv::Mat depth = ReadDepthMap(f.depth);
+    const cv::Mat moving = ReadMask(f.dynamic_mask);
+    cv::Mat z;
+    for (const DatasetFrame& t : truth.train)
+      if (t.id == f.name) z = ReadDepth(t);
+    std::vector<double> errors;
+    int without = 0;
+    for (int y = 0; y < z.rows; ++y)
+      for (int x = 0; x < z.cols; ++x) {
+        if (!moving.at<std::uint8_t>(y, x) || !(z.at<float>(y, x) > 0))
+          continue;
+        const float d = depth.at<float>(y, x);
+        if (!(d > 0)) ++without;
+        else errors.push_back(std::abs(d - z.at<float>(y, x)) / z.at<float>(y, x));
+      }
+    if (errors.empty()) continue;
+    EXPECT_EQ(without, 0) << f.name;
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2,
+                     errors.end());
+    EXPECT_LT(errors[errors.size() / 2], 0.1) << f.name;
+  }
+}
+
 // The source of the Error `run` throws ("" when none).
 template <typename Run>
 std::string ErrorSource(Run run) {
