@@ -38,6 +38,10 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_flag(
+      "--disparity-everywhere",
+      [o](std::int64_t) { o->disparity_moving_only = false; },
+      "The disparity term on every pixel, not only the moving ones");
+  app->add_flag(
       "--no-appearance", [o](std::int64_t) { o->appearance = false; },
       "No per-frame colour transform: the Gaussians' colours explain every "
       "frame's exposure and white balance as they are");

@@ -28,7 +28,7 @@ struct PriorErrorModel {
   // network's soft depth edges).
   double disparity_scale_min = 500, disparity_scale_max = 5000;
   double disparity_shift_max = 0.2;
-  double smooth_error = 0.03;
+  double smooth_error = 0.06;
   double edge_blur_pixels = 2.0;
   // Flow: the exact motion of each pixel's surface point, blurred by a
   // Gaussian of flow_blur_pixels (soft motion boundaries), plus

@@ -273,7 +273,8 @@ std::string InitReport::Brief() const {
 
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                               int num_times, const InitOptions& o,
-                              std::uint64_t seed, InitReport* report_out) {
+                              std::uint64_t seed, InitReport* report_out,
+                              const Tracks2D* given) {
   o.Check();
   const auto start = std::chrono::steady_clock::now();
   InitReport report;
@@ -419,9 +420,33 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                                      ref->camera.width +
                                  x] > 0)
         seeds.emplace_back(x + 0.5f, y + 0.5f);
-  const Tracks2D tracks2d =
-      ChainTracksAlongViews(views, by_time, frames, canonical, seeds, o.tracks,
-                            &report.track_flow);
+  Tracks2D tracks2d;
+  if (given && given->num_times == num_times) {
+    // The tracker's tracks seen at the canonical time on its moving pixels
+    // with depth (the seeds' condition).
+    const std::vector<float>& depth = *depth_at[canonical];
+    const int w = ref->camera.width, h = ref->camera.height;
+    tracks2d.num_times = num_times;
+    tracks2d.reference_time = canonical;
+    for (std::size_t k = 0; k < given->size(); ++k) {
+      if (!given->is_valid(k, canonical)) continue;
+      const Eigen::Vector2f& p = given->pixel(k, canonical);
+      const int x = static_cast<int>(std::floor(p.x()));
+      const int y = static_cast<int>(std::floor(p.y()));
+      if (x < 0 || y < 0 || x >= w || y >= h) continue;
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (!ref->dynamic[i] || !(depth[i] > 0)) continue;
+      for (int t = 0; t < num_times; ++t) {
+        tracks2d.pixels.push_back(given->pixel(k, t));
+        tracks2d.valid.push_back(given->valid[k * num_times + t]);
+      }
+    }
+    report.track_flow = "tracker";
+  }
+  if (static_cast<int>(tracks2d.size()) < kMinGivenTracks) {
+    tracks2d = ChainTracksAlongViews(views, by_time, frames, canonical, seeds,
+                                     o.tracks, &report.track_flow);
+  }
 
   // Lift: X(t) for every valid (track, time) with depth.
   const std::size_t n = tracks2d.size();

@@ -59,8 +59,8 @@ struct InitReport {
   std::int64_t dynamic_points_raw = 0, dynamic_points = 0;
   std::int64_t tracks = 0;
   double track_coverage = 0.0;  // valid (track, time) pairs / all
-  // The flow the tracks followed: "DIS" (computed) or "priors" (the
-  // views' learned flow).
+  // What the tracks followed: "DIS" flow (computed), "priors" (the views'
+  // learned flow) or "tracker" (given tracks).
   std::string track_flow = "DIS";
   int num_bases = 0;
   int canonical_time = 0;
@@ -80,8 +80,13 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
 // `views` as the trainer uses them (depth required on the views that
 // contribute; views without depth are skipped with a warning). `seed`
 // draws the motion clusters' k-means start.
+// `tracks`, when given (a tracker's, learned priors), are followed instead
+// of flow: those seen at the canonical time on a moving pixel with depth,
+// when there are at least kMinGivenTracks of them.
+inline constexpr int kMinGivenTracks = 30;
 GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                               int num_times, const InitOptions& options,
-                              std::uint64_t seed, InitReport* report = nullptr);
+                              std::uint64_t seed, InitReport* report = nullptr,
+                              const Tracks2D* tracks = nullptr);
 
 }  // namespace pano4d

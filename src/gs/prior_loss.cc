@@ -122,10 +122,15 @@ FlowTerm FlowLoss(const GaussianModelT<T>& at_a, std::size_t first,
 
 DisparityTerm DisparityLoss(const std::vector<float>& disparity,
                             const std::vector<float>& rendered_depth,
-                            double weight,
-                            std::vector<float>* d_rendered_depth) {
+                            double weight, std::vector<float>* d_rendered_depth,
+                            const std::vector<std::uint8_t>* mask) {
   CheckSizes("disparity loss", rendered_depth.size(), disparity.size(),
              "rendered depth");
+  if (mask) CheckSizes("disparity loss", mask->size(), disparity.size(), "mask");
+  const auto in = [&](std::size_t p) {
+    return std::isfinite(disparity[p]) && rendered_depth[p] > 0 &&
+           (!mask || (*mask)[p] != 0);
+  };
   CheckSizes("disparity loss", d_rendered_depth->size(), disparity.size(),
              "gradient");
   DisparityTerm term;
@@ -136,8 +141,8 @@ DisparityTerm DisparityLoss(const std::vector<float>& disparity,
   std::vector<double> inverse;
   inverse.reserve(disparity.size() / 4);
   for (std::size_t p = 0; p < disparity.size(); ++p) {
+    if (!in(p)) continue;
     const double d = disparity[p], z = rendered_depth[p];
-    if (!std::isfinite(d) || !(z > 0)) continue;
     const double i = 1.0 / z;
     n += 1;
     sd += d;
@@ -157,8 +162,8 @@ DisparityTerm DisparityLoss(const std::vector<float>& disparity,
   const double norm = weight / (n * median);
   double sum = 0;
   for (std::size_t p = 0; p < disparity.size(); ++p) {
+    if (!in(p)) continue;
     const double d = disparity[p], z = rendered_depth[p];
-    if (!std::isfinite(d) || !(z > 0)) continue;
     const double e = term.scale * d + term.shift - 1.0 / z;
     sum += std::abs(e);
     // d|e|/dz = sign(e) / z^2 (e falls as 1 / z rises).

@@ -61,10 +61,13 @@ struct DisparityTerm {
 
 // `disparity` and `rendered_depth` are H x W; adds dL/dz into
 // `d_rendered_depth` (sized like it). Pixels where `disparity` is not
-// finite or `rendered_depth` not positive are left out.
+// finite or `rendered_depth` not positive are left out, and with `mask`
+// (H x W, nonzero = in) those outside it: on a moving object's pixels the
+// affine is the object's own, so the term holds the shape a network sees
+// in it whatever its affine error across the frame.
 DisparityTerm DisparityLoss(const std::vector<float>& disparity,
                             const std::vector<float>& rendered_depth,
-                            double weight,
-                            std::vector<float>* d_rendered_depth);
+                            double weight, std::vector<float>* d_rendered_depth,
+                            const std::vector<std::uint8_t>* mask = nullptr);
 
 }  // namespace pano4d

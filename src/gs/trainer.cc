@@ -507,9 +507,12 @@ void Trainer::PriorLosses(const TrainingView& view, StepReport* report) {
   flow_backward_.clear();
   if (options_.disparity_weight > 0 && !view.disparity.empty()) {
     if (d_out_.depth.empty()) d_out_.depth.assign(out_.depth.size(), 0.0f);
-    report->disparity = DisparityLoss(view.disparity, out_.depth,
-                                      options_.disparity_weight, &d_out_.depth)
-                            .loss;
+    const bool moving_only =
+        options_.disparity_moving_only && !view.dynamic.empty();
+    report->disparity =
+        DisparityLoss(view.disparity, out_.depth, options_.disparity_weight,
+                      &d_out_.depth, moving_only ? &view.dynamic : nullptr)
+            .loss;
   }
   const std::size_t nd = scene_.dynamics.size();
   if (options_.flow_weight <= 0 || view.flows.empty() || nd == 0) return;

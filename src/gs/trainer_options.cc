@@ -76,6 +76,7 @@ nlohmann::json TrainerOptions::ToJson() const {
           {"flow_tolerance", flow_tolerance},
           {"flow_huber_pixels", flow_huber_pixels},
           {"disparity_weight", disparity_weight},
+          {"disparity_moving_only", disparity_moving_only},
           {"appearance", appearance},
           {"appearance_weight", appearance_weight},
           {"lr_appearance", lr_appearance},

@@ -457,6 +457,7 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
     WorkspaceFrame& f = frames->train[i];
     bar.Add();
     if (maps[i].empty()) {
+      summary->without_learned_depth.push_back(f.name);
       report.push_back({{"frame", f.name}, {"learned", "no file"}});
       continue;
     }
@@ -573,6 +574,12 @@ std::string DepthSummary::BriefReport() const {
       frames.depth_source.c_str());
   if (with_learned_depth > 0 || !alignment_failed.empty()) {
     text += StringPrintf("; learned depth in %d frames", with_learned_depth);
+    if (!without_learned_depth.empty()) {
+      text += ", none in the priors for " +
+              std::to_string(without_learned_depth.size()) + " (" +
+              without_learned_depth.front() +
+              (without_learned_depth.size() > 1 ? ", ..." : "") + ")";
+    }
     if (!alignment_failed.empty()) {
       text += ", not aligned in " + std::to_string(alignment_failed.size()) +
               " (" + alignment_failed.front() +

@@ -36,7 +36,7 @@ struct DepthOptions {
   // The learned depth's local correction towards stereo: a Gaussian of
   // this fraction of the frame's width (CorrectDepthLocally); 0: the
   // affine per frame alone.
-  double learned_depth_smoothing = 0.0;
+  double learned_depth_smoothing = 0.08;
   int factor = kProtocolFactor;     // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side
@@ -56,6 +56,7 @@ struct DepthSummary {
   // why).
   int with_learned_depth = 0;
   std::vector<std::string> alignment_failed;
+  std::vector<std::string> without_learned_depth;  // no file in the priors
   std::string BriefReport() const;
 };
 

@@ -226,9 +226,11 @@ FitInputs LoadFitInputs(const Workspace& ws, const fs::path& priors) {
   inputs.train = LoadTrainingViews(frames.train);
   const fs::path priors_dir = priors.empty() ? frames.priors : priors;
   if (!priors_dir.empty()) {
+    Tracks2D tracks;
     inputs.priors =
         AttachPriors(ScanPriors(priors_dir), PriorVideoFrames(ws, frames),
-                     frames, &inputs.train);
+                     frames, &inputs.train, &tracks);
+    if (tracks.size() > 0) inputs.tracks = std::move(tracks);
     inputs.priors["root"] = fs::absolute(priors_dir).string();
   }
   inputs.val = LoadValidation(frames.val);
@@ -388,7 +390,8 @@ FitSummary FitController::Run() {
     scene = ReadCheckpointScene(ckpt);
   } else {
     scene = InitializeScene(inputs_.train, inputs_.num_times, o.init, o.seed,
-                            &summary.init);
+                            &summary.init,
+                            inputs_.tracks ? &*inputs_.tracks : nullptr);
     PANO4D_LOG(kInfo) << summary.init.Brief();
   }
   summary.seconds.init = init_timer.WallSeconds();

@@ -53,8 +53,9 @@ struct FitInputs {
   // are then scored with `pano4d eval`'s code against its dataset.
   std::optional<WorkspaceFrames> frames;
   // The learned priors attached to the training views (AttachPriors'
-  // report; null without priors).
+  // report; null without priors), and their 2D tracks over the times.
   nlohmann::json priors;
+  std::optional<Tracks2D> tracks;
 };
 
 // The inputs of WS/pano4d/frames.json, with the flow and disparity of

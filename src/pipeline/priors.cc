@@ -81,7 +81,8 @@ std::vector<PriorFrame> PriorVideoFrames(const Workspace& ws,
 nlohmann::json AttachPriors(const PriorsFolder& folder,
                             const std::vector<PriorFrame>& video,
                             const WorkspaceFrames& frames,
-                            std::vector<TrainingView>* views) {
+                            std::vector<TrainingView>* views,
+                            Tracks2D* tracks_out) {
   std::map<std::string, int> view_of;
   for (std::size_t i = 0; i < frames.train.size(); ++i)
     view_of[frames.train[i].name] = static_cast<int>(i);
@@ -91,7 +92,11 @@ nlohmann::json AttachPriors(const PriorsFolder& folder,
     return it == view_of.end() || !video[j].used ? -1 : it->second;
   };
   nlohmann::json report = nlohmann::json::object();
+  // Track files carry no size: they are taken at the other priors'.
+  int source_w = 0, source_h = 0;
   if (const std::optional<DepthPrior> depth = ReadDepthPrior(folder, video)) {
+    source_w = depth->source_width;
+    source_h = depth->source_height;
     std::vector<std::string> without;
     for (std::size_t j = 0; j < video.size(); ++j) {
       const int v = view_at(static_cast<int>(j));
@@ -119,6 +124,10 @@ nlohmann::json AttachPriors(const PriorsFolder& folder,
     }
   }
   if (const std::optional<FlowPrior> flow = ReadFlowPrior(folder, video)) {
+    if (source_w == 0) {
+      source_w = flow->source_width;
+      source_h = flow->source_height;
+    }
     int pairs = 0;
     std::map<std::string, int> masks;
     for (const FlowField& field : flow->fields) {
@@ -145,6 +154,77 @@ nlohmann::json AttachPriors(const PriorsFolder& folder,
                       << pairs << " pairs of neighbouring training frames"
                       << (without.empty() ? ""
                                           : "; none from " + NameList(without));
+  }
+  if (const std::optional<TrackPrior> tracks =
+          ReadTrackPrior(folder, video, source_w, source_h)) {
+    const int n = static_cast<int>(tracks->size());
+    // Over the frames' times.
+    Tracks2D over_time;
+    over_time.num_times = frames.num_times;
+    over_time.pixels.assign(static_cast<std::size_t>(n) * frames.num_times,
+                            Eigen::Vector2f::Zero());
+    over_time.valid.assign(over_time.pixels.size(), 0);
+    std::vector<int> view_of_time(frames.num_times, -1);
+    for (std::size_t j = 0; j < video.size(); ++j) {
+      const int v = view_at(static_cast<int>(j));
+      if (v < 0) continue;
+      const int t = (*views)[v].time;
+      view_of_time[t] = v;
+      for (int k = 0; k < n; ++k) {
+        over_time.pixels[k * frames.num_times + t] =
+            tracks->pixels[k * tracks->num_frames + j];
+        over_time.valid[k * frames.num_times + t] =
+            tracks->visible[k * tracks->num_frames + j];
+      }
+    }
+    // Sparse flows where dense flow is missing.
+    int pairs = 0;
+    for (int ta = 0; ta < frames.num_times; ++ta) {
+      const int a = view_of_time[ta];
+      if (a < 0) continue;
+      TrainingView& va = (*views)[a];
+      const int w = va.camera.width, h = va.camera.height;
+      for (const int gap : kTrackFlowGaps) {
+        for (const int tb : {ta - gap, ta + gap}) {
+          if (tb < 0 || tb >= frames.num_times || view_of_time[tb] < 0)
+            continue;
+          const int b = view_of_time[tb];
+          if (std::any_of(va.flows.begin(), va.flows.end(),
+                          [&](const TrainingView::Flow& f) { return f.view == b; }))
+            continue;
+          TrainingView::Flow f;
+          f.view = b;
+          f.flow.assign(static_cast<std::size_t>(w) * h * 2, 0.0f);
+          f.valid.assign(static_cast<std::size_t>(w) * h, 0);
+          int used = 0;
+          for (int k = 0; k < n; ++k) {
+            const std::size_t ka = k * frames.num_times + ta;
+            const std::size_t kb = k * frames.num_times + tb;
+            if (!over_time.valid[ka] || !over_time.valid[kb]) continue;
+            const Eigen::Vector2f pa = over_time.pixels[ka];
+            const int x = static_cast<int>(std::floor(pa.x()));
+            const int y = static_cast<int>(std::floor(pa.y()));
+            if (x < 0 || y < 0 || x >= w || y >= h) continue;
+            const std::size_t p = static_cast<std::size_t>(y) * w + x;
+            const Eigen::Vector2f d = over_time.pixels[kb] - pa;
+            f.flow[2 * p] = d.x();
+            f.flow[2 * p + 1] = d.y();
+            f.valid[p] = kMaskOn;
+            ++used;
+          }
+          if (used == 0) continue;
+          va.flows.push_back(std::move(f));
+          ++pairs;
+        }
+      }
+    }
+    report["tracks"] = {{"layout", tracks->layout->name},
+                        {"tracks", n},
+                        {"sparse_flow_pairs", pairs}};
+    PANO4D_LOG(kInfo) << "fit: " << n << " tracks from "
+                      << tracks->layout->name << "; sparse flow for " << pairs
+                      << " pairs of training frames";
+    if (tracks_out) *tracks_out = std::move(over_time);
   }
   return report;
 }
@@ -173,7 +253,9 @@ std::vector<std::string> DescribePriorUse(const PriorsFolder& folder,
         use = "the motion's initial tracks (chained from the canonical "
               "frame) and the flow loss on the dynamic Gaussians";
       } else if (kind == PriorKind::kTracks) {
-        use = "not used yet: pano4d's motion starts from flow (issue 56)";
+        use = "the motion's initial tracks (those seen at the canonical "
+              "frame) and, between frames 1 or 2 apart without dense flow, "
+              "the flow loss at the tracks' pixels";
       } else {
         use = "the dynamic masks";
       }

@@ -14,6 +14,7 @@
 #include "src/core/frames.h"
 #include "src/core/workspace.h"
 #include "src/datasets/priors.h"
+#include "src/geometry/tracks.h"
 #include "src/gs/training_view.h"
 
 namespace pano4d {
@@ -31,10 +32,16 @@ std::vector<PriorFrame> PriorVideoFrames(const Workspace& workspace,
 // order). Returns what was attached, for fit.json and the log: per kind
 // the layout used, the frames or pairs without, and what was found and
 // not used.
+// The priors' tracks, when it holds some, go into `tracks` (over the
+// frames' times, for the motion's initialisation) and, between training
+// views kTrackFlowGaps apart that have no dense flow, into sparse flows
+// (valid at the tracks' pixels) for the flow loss.
+inline constexpr int kTrackFlowGaps[] = {1, 2};
 nlohmann::json AttachPriors(const PriorsFolder& folder,
                             const std::vector<PriorFrame>& video,
                             const WorkspaceFrames& frames,
-                            std::vector<TrainingView>* views);
+                            std::vector<TrainingView>* views,
+                            Tracks2D* tracks = nullptr);
 
 // One line per layout of `folder` and what the run does with it, for the
 // plan and `pano4d dataset info`: "flow: OmniMotion raft_exhaustive/ (22

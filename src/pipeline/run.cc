@@ -361,7 +361,10 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     depth_ran = true;
     const DepthSummary r = RunDepth(ws, d);
     PANO4D_LOG(kInfo) << "depth: " << r.BriefReport();
-    return StageResult{plan.Runs("depth") ? "estimated" : "listed", *stale};
+    std::string why = *stale;
+    // Partial or failed learned depth: which frames, in the plan's results.
+    if (!d.priors.empty()) why += "; " + r.BriefReport();
+    return StageResult{plan.Runs("depth") ? "estimated" : "listed", why};
   });
 
   // The dynamic masks exist now: the motion decision.

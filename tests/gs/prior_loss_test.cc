@@ -195,6 +195,14 @@ TEST(DisparityLossTest, InvariantToTheAffineAndGradientChecked) {
     const double numeric = (term(z[p] + h) - term(z[p] - h)) / (2 * h);
     EXPECT_NEAR(d[p], numeric, 1e-4 * std::abs(numeric) + 1e-9) << p;
   }
+  // With a mask only its pixels count, with an affine of their own.
+  std::vector<std::uint8_t> mask(z.size(), 0);
+  for (std::size_t p = 0; p < 100; ++p) mask[p] = 255;
+  std::fill(d.begin(), d.end(), 0.0f);
+  const DisparityTerm masked = DisparityLoss(disparity, z, 1.0, &d, &mask);
+  EXPECT_EQ(masked.pixels, 98);  // pixels 7 and 9 have no render / prior
+  EXPECT_EQ(d[150], 0.0f);
+  EXPECT_NE(d[0], 0.0f);
 }
 
 }  // namespace

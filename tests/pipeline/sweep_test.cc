@@ -12,6 +12,7 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/json.h"
+#include "src/core/npy.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -171,6 +172,43 @@ TEST_F(SweepTest, TheStopSignalCheckpointsAndTheRerunResumes) {
   // keep the test short).
   ASSERT_EQ(RunLogged(signalled, log), 75) << Slurp(log);
   EXPECT_NE(Slurp(log).find("fit: resumed from"), std::string::npos)
+      << Slurp(log);
+}
+
+// --priors ROOT: an entry whose scene has priors under ROOT/<scene> runs
+// with them; one without runs without.
+TEST_F(SweepTest, PriorsReachTheEntriesThatHaveThem) {
+  const fs::path priors = dir_->path() / "priors";
+  NpyArray disparity = NpyArray::FromFloats({48, 64}, std::vector<float>(48 * 64, 1.0f));
+  WriteNpy(priors / "tiny" / "disp" / "0_00000.npy", disparity);
+  const fs::path sweep = dir_->path() / "sweep_priors";
+  const fs::path log = dir_->path() / "sweep_priors.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --priors '" + priors.string() + "' --out '" +
+                          sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const auto command = ReadJson(sweep / "manifest.json")["entries"][0]["command"]
+                           .get<std::vector<std::string>>();
+  const auto at = std::find(command.begin(), command.end(), "--priors");
+  ASSERT_NE(at, command.end());
+  EXPECT_EQ(fs::path(*(at + 1)), fs::absolute(priors / "tiny"));
+  // A root without this scene's folder: no --priors, and the log says why.
+  fs::create_directories(dir_->path() / "empty_priors");
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --priors '" +
+                          (dir_->path() / "empty_priors").string() +
+                          "' --out '" + sweep.string() + "2'",
+                      log),
+            0)
+      << Slurp(log);
+  const auto without =
+      ReadJson(fs::path(sweep.string() + "2") / "manifest.json")["entries"][0]
+          ["command"].get<std::vector<std::string>>();
+  EXPECT_EQ(std::find(without.begin(), without.end(), "--priors"),
+            without.end());
+  EXPECT_NE(Slurp(log).find("without learned priors"), std::string::npos)
       << Slurp(log);
 }
 
