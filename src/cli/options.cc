@@ -311,6 +311,10 @@ void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
                     "affine per frame only)")
         ->check(CLI::Range(0.0, 1.0))
         ->capture_default_str();
+    app->add_flag("--consistent-moving-depth", depth->consistent_moving_depth,
+                  "Rescale each frame's moving pixels' learned depth so that "
+                  "along the priors' flow it changes between neighbouring "
+                  "frames as much as the flow stretches them (needs flow)");
   }
 }
 

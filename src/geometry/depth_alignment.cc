@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Dense>
 #include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
 
@@ -214,6 +215,84 @@ cv::Mat CorrectDepthLocally(const cv::Mat& depth, const cv::Mat& reference,
                                static_cast<float>(kMinLocalSupport));
       d *= std::exp(value.at<float>(y, x) / w);
     }
+  }
+  return out;
+}
+
+MovingDepthPair CompareMovingDepth(const cv::Mat& depth_a,
+                                   const cv::Mat& moving_a,
+                                   const cv::Mat& depth_b,
+                                   const cv::Mat& moving_b,
+                                   const cv::Mat& flow_ab, int step) {
+  if (depth_a.size() != moving_a.size() || depth_a.size() != flow_ab.size() ||
+      depth_b.size() != moving_b.size() || flow_ab.type() != CV_32FC2 ||
+      step < 1) {
+    throw Error("moving depth comparison", "sizes", "",
+                "depth, masks and flow must share their frame's size");
+  }
+  const int w = depth_a.cols, h = depth_a.rows;
+  // Where a's moving pixel (x, y) lands in b, when it lands on a moving
+  // pixel of b with depth.
+  auto land = [&](int x, int y, cv::Point2f* to, float* z_b) {
+    if (!moving_a.at<std::uint8_t>(y, x) || !(depth_a.at<float>(y, x) > 0))
+      return false;
+    const cv::Vec2f f = flow_ab.at<cv::Vec2f>(y, x);
+    *to = cv::Point2f(x + f[0], y + f[1]);
+    const int bx = static_cast<int>(std::lround(to->x));
+    const int by = static_cast<int>(std::lround(to->y));
+    if (bx < 0 || by < 0 || bx >= depth_b.cols || by >= depth_b.rows)
+      return false;
+    *z_b = depth_b.at<float>(by, bx);
+    return moving_b.at<std::uint8_t>(by, bx) && *z_b > 0;
+  };
+  std::vector<double> ratios, stretches;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      cv::Point2f p;
+      float z_b = 0;
+      if (!land(x, y, &p, &z_b)) continue;
+      ratios.push_back(std::log(z_b / depth_a.at<float>(y, x)));
+      for (const cv::Point d : {cv::Point(step, 0), cv::Point(0, step)}) {
+        cv::Point2f q;
+        float unused = 0;
+        if (x + d.x >= w || y + d.y >= h || !land(x + d.x, y + d.y, &q, &unused))
+          continue;
+        const double length = cv::norm(q - p);
+        if (length > 0) stretches.push_back(std::log(length / step));
+      }
+    }
+  }
+  MovingDepthPair pair;
+  pair.matches = static_cast<int>(ratios.size());
+  if (!ratios.empty()) pair.log_depth_ratio = UpperMedian(std::move(ratios));
+  if (!stretches.empty()) pair.log_stretch = UpperMedian(std::move(stretches));
+  return pair;
+}
+
+std::vector<double> ConsistentMovingDepthScales(
+    const std::vector<MovingDepthPair>& pairs) {
+  const int n = static_cast<int>(pairs.size()) + 1;
+  // Normal equations of the chain, the anchor and the mean: small and
+  // dense (one row a frame).
+  Eigen::MatrixXd a = Eigen::MatrixXd::Identity(n, n) * kScaleAnchorWeight;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  for (int t = 0; t + 1 < n; ++t) {
+    const MovingDepthPair& p = pairs[t];
+    if (p.matches < kMinMovingMatches) continue;
+    const double target = -p.log_stretch - p.log_depth_ratio;  // c_t+1 - c_t
+    a(t, t) += 1;
+    a(t + 1, t + 1) += 1;
+    a(t, t + 1) -= 1;
+    a(t + 1, t) -= 1;
+    b(t) -= target;
+    b(t + 1) += target;
+  }
+  a += Eigen::MatrixXd::Ones(n, n);  // (sum c)^2: mean zero
+  const Eigen::VectorXd c = a.ldlt().solve(b);
+  std::vector<double> out(n);
+  for (int t = 0; t < n; ++t) {
+    out[t] = std::clamp(std::isfinite(c(t)) ? c(t) : 0.0,
+                        -kMaxMovingScaleCorrection, kMaxMovingScaleCorrection);
   }
   return out;
 }

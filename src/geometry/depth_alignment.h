@@ -82,4 +82,39 @@ inline constexpr double kMinLocalSupport = 0.05;
 cv::Mat CorrectDepthLocally(const cv::Mat& depth, const cv::Mat& reference,
                             const cv::Mat& trusted, double sigma);
 
+// Moving pixels of frame a matched by the flow a -> b to moving pixels of
+// b with depth in both: the median log ratio of their depths (b over a)
+// and the median log ratio by which the flow stretches the moving content
+// (distances between a moving pixel and its neighbour `step` pixels right
+// or below, in b over in a). A surface that looks s times larger is 1/s
+// times as far, so a depth ratio that disagrees with the stretch is depth
+// error: a network's disparity aligned per frame can jump by tens of
+// percent on a near moving object between neighbouring frames, while the
+// flow, a matching of pixels, holds its scale to a few percent.
+struct MovingDepthPair {
+  double log_depth_ratio = 0;
+  double log_stretch = 0;
+  int matches = 0;
+};
+MovingDepthPair CompareMovingDepth(const cv::Mat& depth_a,
+                                   const cv::Mat& moving_a,
+                                   const cv::Mat& depth_b,
+                                   const cv::Mat& moving_b,
+                                   const cv::Mat& flow_ab, int step);
+
+// A pair with fewer matches says nothing about its frames' scales.
+inline constexpr int kMinMovingMatches = 200;
+
+// Log-scale corrections c_t of the moving pixels' depth in a sequence of
+// frames, pairs[t] comparing frame t with t + 1: least squares on
+// log_depth_ratio + c_(t+1) - c_t = -log_stretch over the pairs with
+// kMinMovingMatches matches, with mean zero (the per-frame alignment's
+// scale is right on average) and a weak pull of each c_t to zero
+// (kScaleAnchorWeight) so that frames no pair links stay as they are.
+// Each c_t is clamped to +-kMaxMovingScaleCorrection.
+inline constexpr double kScaleAnchorWeight = 1e-3;
+inline constexpr double kMaxMovingScaleCorrection = 0.7;  // log: x2
+std::vector<double> ConsistentMovingDepthScales(
+    const std::vector<MovingDepthPair>& pairs);
+
 }  // namespace pano4d

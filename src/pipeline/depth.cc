@@ -526,6 +526,71 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
   WriteJson(ws.depth() / "priors.json", report);
 }
 
+// The moving pixels' depth of neighbouring training frames made to agree
+// with the flow between them (ConsistentMovingDepthScales): each frame's
+// moving depth is multiplied by exp(c_t), and priors.json gives c_t
+// (`moving_depth_log_scale`) and each pair's comparison.
+void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
+                               const std::vector<PriorFrame>& video,
+                               const WorkspaceFrames& frames) {
+  // The training frames in the video's order (PriorVideoFrames' order is
+  // time order), and the flow from each to the next.
+  std::map<std::string, std::size_t> video_index;
+  for (std::size_t j = 0; j < video.size(); ++j) video_index[video[j].name] = j;
+  std::vector<const WorkspaceFrame*> order;
+  for (const WorkspaceFrame& f : frames.train)
+    if (video_index.count(f.name) && !f.depth.empty() && !f.dynamic_mask.empty())
+      order.push_back(&f);
+  std::sort(order.begin(), order.end(), [&](const auto* a, const auto* b) {
+    return video_index[a->name] < video_index[b->name];
+  });
+  if (order.size() < 2) return;
+  std::vector<cv::Mat> depth(order.size()), moving(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    depth[i] = ReadDepthMap(order[i]->depth);
+    moving[i] = ReadMask(order[i]->dynamic_mask) >= 128;
+  }
+  std::vector<MovingDepthPair> pairs(order.size() - 1);
+  nlohmann::json pair_report = nlohmann::json::array();
+  for (std::size_t i = 0; i + 1 < order.size(); ++i) {
+    const std::size_t from = video_index[order[i]->name];
+    const std::size_t to = video_index[order[i + 1]->name];
+    for (const FlowField& field : flow.fields) {
+      if (field.from != static_cast<int>(from) ||
+          field.to != static_cast<int>(to) ||
+          field.flow.size() != depth[i].size())
+        continue;
+      cv::Mat trusted = moving[i].clone();
+      trusted.setTo(0, field.valid == 0);
+      pairs[i] = CompareMovingDepth(depth[i], trusted, depth[i + 1],
+                                    moving[i + 1], field.flow,
+                                    std::max(2, depth[i].cols / 60));
+    }
+    pair_report.push_back({{"from", order[i]->name},
+                           {"to", order[i + 1]->name},
+                           {"matches", pairs[i].matches},
+                           {"log_depth_ratio", pairs[i].log_depth_ratio},
+                           {"log_stretch", pairs[i].log_stretch}});
+  }
+  const std::vector<double> scale = ConsistentMovingDepthScales(pairs);
+  const fs::path report_file = ws.depth() / "priors.json";
+  nlohmann::json report = ReadJson(report_file);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    cv::multiply(depth[i], std::exp(scale[i]), depth[i], 1.0, CV_32F);
+    cv::Mat kept = ReadDepthMap(order[i]->depth);
+    kept.copyTo(depth[i], moving[i] == 0);
+    WriteDepthMap(order[i]->depth, depth[i]);
+    for (auto& entry : report)
+      if (entry["frame"] == order[i]->name)
+        entry["moving_depth_log_scale"] = scale[i];
+  }
+  report.push_back({{"moving_depth_pairs", pair_report}});
+  WriteJson(report_file, report);
+  PANO4D_LOG(kInfo) << "depth: moving depth made consistent along the flow "
+                       "over "
+                    << order.size() << " frames";
+}
+
 }  // namespace
 
 void DepthOptions::Check() const {
@@ -551,6 +616,7 @@ nlohmann::json DepthOptions::ToJson() const {
           {"priors", priors.string()},
           {"prior_masks_join", prior_masks_join},
           {"learned_depth_smoothing", learned_depth_smoothing},
+          {"consistent_moving_depth", consistent_moving_depth},
           {"factor", factor},
           {"holdout", holdout},
           {"stereo_long_side", stereo_long_side},
@@ -685,6 +751,13 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
                         &frames, &summary);
       if (summary.with_learned_depth > 0)
         frames.depth_source = kDepthFromPriors;
+      if (o.consistent_moving_depth && summary.with_learned_depth > 0) {
+        if (const std::optional<FlowPrior> flow = ReadFlowPrior(*priors, video))
+          MakeMovingDepthConsistent(ws, *flow, video, frames);
+        else
+          PANO4D_LOG(kWarning) << "depth: --consistent-moving-depth needs "
+                                  "flow among the priors; there is none";
+      }
     }
   }
   frames.priors = o.priors.empty() ? fs::path() : fs::absolute(o.priors);

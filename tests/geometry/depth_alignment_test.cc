@@ -1,5 +1,6 @@
 #include "src/geometry/depth_alignment.h"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -138,6 +139,65 @@ TEST(DepthAlignmentTest, LocalCorrectionFollowsTheReferenceAroundAHole) {
   EXPECT_EQ(none.at<float>(30, 17), 5.5f);
   EXPECT_THROW(CorrectDepthLocally(learned, reference(cv::Rect(0, 0, 10, 10)),
                                    trusted, 6.0),
+               Error);
+}
+
+// A square moving right at a constant depth of 4, seen in three frames; the
+// learned depth of the middle frame puts it 30% too far. The flow does not
+// stretch the square, so the comparison sees the jump and the corrections
+// undo it (up to the mean, which they keep).
+TEST(DepthAlignmentTest, MovingDepthIsMadeConsistentAlongTheFlow) {
+  const int w = 80, h = 60;
+  std::vector<cv::Mat> depth, moving;
+  for (int t = 0; t < 3; ++t) {
+    cv::Mat z(h, w, CV_32F, cv::Scalar(10)), m(h, w, CV_8UC1, cv::Scalar(0));
+    const cv::Rect square(10 + 5 * t, 15, 30, 30);
+    z(square).setTo(t == 1 ? 4.0f * 1.3f : 4.0f);
+    m(square).setTo(255);
+    depth.push_back(z);
+    moving.push_back(m);
+  }
+  const cv::Mat flow(h, w, CV_32FC2, cv::Scalar(5, 0));
+  std::vector<MovingDepthPair> pairs;
+  for (int t = 0; t < 2; ++t) {
+    pairs.push_back(CompareMovingDepth(depth[t], moving[t], depth[t + 1],
+                                       moving[t + 1], flow, 2));
+  }
+  EXPECT_GT(pairs[0].matches, 800);
+  EXPECT_NEAR(pairs[0].log_depth_ratio, std::log(1.3), 1e-6);
+  EXPECT_NEAR(pairs[1].log_depth_ratio, -std::log(1.3), 1e-6);
+  EXPECT_NEAR(pairs[0].log_stretch, 0.0, 1e-6);
+  const std::vector<double> c = ConsistentMovingDepthScales(pairs);
+  ASSERT_EQ(c.size(), 3u);
+  // The middle frame comes down by 1.3 relative to its neighbours.
+  EXPECT_NEAR(c[1] - c[0], -std::log(1.3), 1e-3);
+  EXPECT_NEAR(c[2] - c[1], std::log(1.3), 1e-3);
+  EXPECT_NEAR(c[0] + c[1] + c[2], 0.0, 1e-6);
+
+  // The square grows by 10% (comes closer) with the depth unchanged: the
+  // depth of the later frame must come down by 10%.
+  const cv::Mat grow = [&] {
+    cv::Mat f(h, w, CV_32FC2);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        f.at<cv::Vec2f>(y, x) = cv::Vec2f(0.1f * (x - 25), 0.1f * (y - 30));
+    return f;
+  }();
+  cv::Mat big(h, w, CV_8UC1, cv::Scalar(0));
+  big(cv::Rect(8, 13, 34, 34)).setTo(255);
+  cv::Mat z_big(h, w, CV_32F, cv::Scalar(4));
+  const MovingDepthPair closer =
+      CompareMovingDepth(depth[0], moving[0], z_big, big, grow, 4);
+  EXPECT_NEAR(closer.log_stretch, std::log(1.1), 1e-3);
+  const std::vector<double> d = ConsistentMovingDepthScales({closer});
+  EXPECT_NEAR(d[1] - d[0], -std::log(1.1), 1e-3);
+
+  // A pair with too few matches links nothing: no correction.
+  MovingDepthPair few = pairs[0];
+  few.matches = kMinMovingMatches - 1;
+  for (const double v : ConsistentMovingDepthScales({few})) EXPECT_EQ(v, 0.0);
+  EXPECT_THROW(CompareMovingDepth(depth[0], moving[0](cv::Rect(0, 0, 5, 5)),
+                                  depth[1], moving[1], flow, 2),
                Error);
 }
 

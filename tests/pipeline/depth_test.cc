@@ -2,6 +2,7 @@
 // another tool's depth maps aligned to the SfM points of a COLMAP
 // workspace (here one built from the tiny synthetic scene's true cameras
 // and depth, so that the right answer is known).
+#include "src/geometry/depth_alignment.h"
 #include "src/pipeline/depth.h"
 
 #include <algorithm>
@@ -266,6 +267,24 @@ TEST_F(DepthStageTest, LearnedDepthFillsMovingPixelsAndStereoHoles) {
                      errors.end());
     EXPECT_LT(errors[errors.size() / 2], 0.1) << f.name;
   }
+
+  // Made consistent along the flow: every frame with learned depth and a
+  // neighbour gets its correction, and each neighbouring pair is compared.
+  const Workspace ws2 = ColmapWorkspace("consistent_moving_depth");
+  o.consistent_moving_depth = true;
+  RunDepth(ws2, o);
+  const Json consistent = ReadJson(ws2.depth() / "priors.json");
+  int corrected = 0;
+  for (const Json& e : consistent) {
+    if (e.contains("moving_depth_log_scale")) {
+      ++corrected;
+      EXPECT_LT(std::abs(e.at("moving_depth_log_scale").get<double>()),
+                kMaxMovingScaleCorrection + 1e-9);
+    }
+  }
+  EXPECT_EQ(corrected, 8);
+  ASSERT_TRUE(consistent.back().contains("moving_depth_pairs"));
+  EXPECT_EQ(consistent.back().at("moving_depth_pairs").size(), 7u);
 }
 
 // The source of the Error `run` throws ("" when none).
