@@ -561,7 +561,7 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
           field.flow.size() != depth[i].size())
         continue;
       cv::Mat trusted = moving[i].clone();
-      trusted.setTo(0, field.valid == 0);
+      if (!field.valid.empty()) trusted.setTo(0, field.valid == 0);
       pairs[i] = CompareMovingDepth(depth[i], trusted, depth[i + 1],
                                     moving[i + 1], field.flow,
                                     std::max(2, depth[i].cols / 60));
