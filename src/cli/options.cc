@@ -304,8 +304,7 @@ void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
     app->add_flag("--prior-masks-join", depth->prior_masks_join,
                   "Add the priors' motion masks to the computed ones instead "
                   "of replacing them");
-    app->add_option("--learned-depth-smoothing",
-                    depth->learned_depth_smoothing,
+    app->add_option("--learned-depth-smoothing", depth->learned_depth_smoothing,
                     "Correct the learned depth locally towards stereo: a "
                     "Gaussian of this fraction of the frame's width (0: one "
                     "affine per frame only)")

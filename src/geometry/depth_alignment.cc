@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Dense>
 #include <ceres/ceres.h>
+#include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
@@ -199,9 +199,8 @@ cv::Mat CorrectDepthLocally(const cv::Mat& depth, const cv::Mat& reference,
       const float d = depth.at<float>(y, x), r = reference.at<float>(y, x);
       if (!trusted.at<std::uint8_t>(y, x) || !(d > 0) || !(r > 0)) continue;
       weight.at<float>(y, x) = 1.0f;
-      value.at<float>(y, x) = static_cast<float>(
-          std::clamp(std::log(double(r) / d), -kMaxLocalCorrection,
-                     kMaxLocalCorrection));
+      value.at<float>(y, x) = static_cast<float>(std::clamp(
+          std::log(double(r) / d), -kMaxLocalCorrection, kMaxLocalCorrection));
     }
   }
   cv::GaussianBlur(weight, weight, cv::Size(), sigma);
@@ -255,7 +254,8 @@ MovingDepthPair CompareMovingDepth(const cv::Mat& depth_a,
       for (const cv::Point d : {cv::Point(step, 0), cv::Point(0, step)}) {
         cv::Point2f q;
         float unused = 0;
-        if (x + d.x >= w || y + d.y >= h || !land(x + d.x, y + d.y, &q, &unused))
+        if (x + d.x >= w || y + d.y >= h ||
+            !land(x + d.x, y + d.y, &q, &unused))
           continue;
         const double length = cv::norm(q - p);
         if (length > 0) stretches.push_back(std::log(length / step));

@@ -445,8 +445,8 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
   double max_depth = kMaxPlausibleDepth;
   if (!sample_depths.empty()) {
     std::sort(sample_depths.begin(), sample_depths.end());
-    max_depth = kMaxLearnedDepthFactor *
-                sample_depths[sample_depths.size() * 98 / 100];
+    max_depth =
+        kMaxLearnedDepthFactor * sample_depths[sample_depths.size() * 98 / 100];
   }
   const DepthModel depth_model =
       metric ? DepthModel::kScale : DepthModel::kAffineDisparity;
@@ -470,8 +470,7 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
       entry["as_given"] = "the model has no points";
     } else {
       try {
-        const DepthAlignment a =
-            AlignDepthModel(map, samples[i], depth_model);
+        const DepthAlignment a = AlignDepthModel(map, samples[i], depth_model);
         entry["scale"] = a.scale;
         entry["shift"] = a.shift;
         entry["samples"] = a.samples;
@@ -493,16 +492,16 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
         continue;
       }
     }
-    cv::Mat depth = f.depth.empty() ? cv::Mat(learned.size(), CV_32F,
-                                              cv::Scalar(0))
-                                    : ReadDepthMap(f.depth);
+    cv::Mat depth = f.depth.empty()
+                        ? cv::Mat(learned.size(), CV_32F, cv::Scalar(0))
+                        : ReadDepthMap(f.depth);
     cv::Mat moving;
     if (!f.dynamic_mask.empty()) moving = ReadMask(f.dynamic_mask) >= 128;
     if (smoothing > 0 && !f.depth.empty()) {
       cv::Mat trusted = depth > 0;
       if (!moving.empty()) trusted.setTo(0, moving);
-      learned = CorrectDepthLocally(learned, depth, trusted,
-                                    smoothing * depth.cols);
+      learned =
+          CorrectDepthLocally(learned, depth, trusted, smoothing * depth.cols);
     }
     int filled_moving = 0, filled_holes = 0;
     for (int y = 0; y < depth.rows; ++y) {
@@ -539,7 +538,8 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
   for (std::size_t j = 0; j < video.size(); ++j) video_index[video[j].name] = j;
   std::vector<const WorkspaceFrame*> order;
   for (const WorkspaceFrame& f : frames.train)
-    if (video_index.count(f.name) && !f.depth.empty() && !f.dynamic_mask.empty())
+    if (video_index.count(f.name) && !f.depth.empty() &&
+        !f.dynamic_mask.empty())
       order.push_back(&f);
   std::sort(order.begin(), order.end(), [&](const auto* a, const auto* b) {
     return video_index[a->name] < video_index[b->name];
@@ -562,9 +562,9 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
         continue;
       cv::Mat trusted = moving[i].clone();
       if (!field.valid.empty()) trusted.setTo(0, field.valid == 0);
-      pairs[i] = CompareMovingDepth(depth[i], trusted, depth[i + 1],
-                                    moving[i + 1], field.flow,
-                                    std::max(2, depth[i].cols / 60));
+      pairs[i] =
+          CompareMovingDepth(depth[i], trusted, depth[i + 1], moving[i + 1],
+                             field.flow, std::max(2, depth[i].cols / 60));
     }
     pair_report.push_back({{"from", order[i]->name},
                            {"to", order[i + 1]->name},
@@ -576,9 +576,8 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
   const fs::path report_file = ws.depth() / "priors.json";
   nlohmann::json report = ReadJson(report_file);
   for (std::size_t i = 0; i < order.size(); ++i) {
-    cv::multiply(depth[i], std::exp(scale[i]), depth[i], 1.0, CV_32F);
-    cv::Mat kept = ReadDepthMap(order[i]->depth);
-    kept.copyTo(depth[i], moving[i] == 0);
+    const cv::Mat scaled = depth[i] * std::exp(scale[i]);
+    scaled.copyTo(depth[i], moving[i]);
     WriteDepthMap(order[i]->depth, depth[i]);
     for (auto& entry : report)
       if (entry["frame"] == order[i]->name)
@@ -746,7 +745,8 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   else if (frames.depth_source == kDepthFromExternal)
     AlignExternalDepth(ws, o, model, &frames);
   if (priors && frames.depth_source == kDepthFromStereo) {
-    if (const std::optional<DepthPrior> depth = ReadDepthPrior(*priors, video)) {
+    if (const std::optional<DepthPrior> depth =
+            ReadDepthPrior(*priors, video)) {
       MergeLearnedDepth(ws, model, *depth, o.learned_depth_smoothing, video,
                         &frames, &summary);
       if (summary.with_learned_depth > 0)

@@ -41,7 +41,7 @@ struct DepthOptions {
   // priors' flow between neighbouring frames, their depth changes as much
   // as the flow stretches them (ConsistentMovingDepthScales); needs flow.
   bool consistent_moving_depth = false;
-  int factor = kProtocolFactor;     // a dataset's resolution divisor
+  int factor = kProtocolFactor;  // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side
   // (time; the fit's frames are usually smaller).

@@ -102,12 +102,12 @@ TEST(RunRealDataTest, NvidiaBalloon1WithItsPriorsBeatsTheClassicalPath) {
   testing::TempDir dir;
   const fs::path ws = dir / "ws";
   const fs::path log = dir / "run.log";
-  ASSERT_EQ(testing::RunPano4d("run --dataset '" + scene.string() +
-                                   "' --priors '" + scene.string() +
-                                   "' --workspace '" + ws.string() +
-                                   "' --eval --iterations 300",
-                               log),
-            0)
+  ASSERT_EQ(
+      testing::RunPano4d("run --dataset '" + scene.string() + "' --priors '" +
+                             scene.string() + "' --workspace '" + ws.string() +
+                             "' --eval --iterations 300",
+                         log),
+      0)
       << Slurp(log);
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["priors"].size(), 2u) << plan["facts"].dump(2);

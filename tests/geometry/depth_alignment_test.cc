@@ -88,8 +88,8 @@ TEST(DepthAlignmentTest, DisparityIsAlignedInInverseDepth) {
   cv::Mat disparity(s.depth.size(), CV_32F);
   for (int v = 0; v < 60; ++v)
     for (int u = 0; u < 80; ++u)
-      disparity.at<float>(v, u) = static_cast<float>(
-          (1.0 / s.depth.at<float>(v, u) - shift) / scale);
+      disparity.at<float>(v, u) =
+          static_cast<float>((1.0 / s.depth.at<float>(v, u) - shift) / scale);
   const DepthAlignment a =
       AlignDepthModel(disparity, s.samples, DepthModel::kAffineDisparity);
   EXPECT_NEAR(a.scale, scale, 0.01 * scale);

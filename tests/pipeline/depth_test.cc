@@ -2,8 +2,8 @@
 // another tool's depth maps aligned to the SfM points of a COLMAP
 // workspace (here one built from the tiny synthetic scene's true cameras
 // and depth, so that the right answer is known).
-#include "src/geometry/depth_alignment.h"
 #include "src/pipeline/depth.h"
+#include "src/geometry/depth_alignment.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,8 +19,8 @@
 #include "colmap_ext/model.h"
 #include "src/core/error.h"
 #include "src/core/image.h"
-#include "src/core/log.h"
 #include "src/core/json.h"
+#include "src/core/log.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/depth_map.h"
 #include "src/datasets/synth_generate.h"
@@ -210,8 +210,8 @@ TEST_F(DepthStageTest, LearnedDepthFillsMovingPixelsAndStereoHoles) {
     fs::remove_all(scene / "depth");
   }
   ASSERT_TRUE(fs::exists(scene / "disp" / "0_00003.npy"));
-  ASSERT_TRUE(fs::exists(scene / "raft_exhaustive" /
-                         "0_00003.png_0_00004.png.npy"));
+  ASSERT_TRUE(
+      fs::exists(scene / "raft_exhaustive" / "0_00003.png_0_00004.png.npy"));
   fs::remove(scene / "disp" / "0_00005.npy");
   // A motion mask for frame 0_00002 only: the whole left half moving.
   cv::Mat mask(96, 128, CV_8UC1, cv::Scalar(0));
@@ -258,8 +258,10 @@ TEST_F(DepthStageTest, LearnedDepthFillsMovingPixelsAndStereoHoles) {
         if (!moving.at<std::uint8_t>(y, x) || !(z.at<float>(y, x) > 0))
           continue;
         const float d = depth.at<float>(y, x);
-        if (!(d > 0)) ++without;
-        else errors.push_back(std::abs(d - z.at<float>(y, x)) / z.at<float>(y, x));
+        if (!(d > 0))
+          ++without;
+        else
+          errors.push_back(std::abs(d - z.at<float>(y, x)) / z.at<float>(y, x));
       }
     if (errors.empty()) continue;
     EXPECT_EQ(without, 0) << f.name;
@@ -372,8 +374,9 @@ TEST_F(DepthStageTest, ItsStampNoticesAChangedImageOrModel) {
   EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)).value_or(""),
             "sparse/0/points3D.bin is gone");
   o.holdout = o.holdout + 1;
-  EXPECT_NE(stamp.StaleReason(DepthStageInputs(ws, o)).value_or("").find(
-                "option depth.holdout"),
+  EXPECT_NE(stamp.StaleReason(DepthStageInputs(ws, o))
+                .value_or("")
+                .find("option depth.holdout"),
             std::string::npos);
 }
 
