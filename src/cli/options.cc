@@ -37,10 +37,10 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
                   "(--priors; 0: off)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app->add_flag(
-      "--disparity-everywhere",
-      [o](std::int64_t) { o->disparity_moving_only = false; },
-      "The disparity term on every pixel, not only the moving ones");
+  app->add_flag("--disparity-moving-only,!--disparity-everywhere",
+                o->disparity_moving_only,
+                "The disparity term on the moving pixels only, leaving the "
+                "static ones to stereo (default: every pixel)");
   app->add_flag(
       "--no-appearance", [o](std::int64_t) { o->appearance = false; },
       "No per-frame colour transform: the Gaussians' colours explain every "
@@ -310,10 +310,12 @@ void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
                     "affine per frame only)")
         ->check(CLI::Range(0.0, 1.0))
         ->capture_default_str();
-    app->add_flag("--consistent-moving-depth", depth->consistent_moving_depth,
+    app->add_flag("--consistent-moving-depth,!--no-consistent-moving-depth",
+                  depth->consistent_moving_depth,
                   "Rescale each frame's moving pixels' learned depth so that "
                   "along the priors' flow it changes between neighbouring "
-                  "frames as much as the flow stretches them (needs flow)");
+                  "frames as much as the flow stretches them (default; "
+                  "needs flow)");
   }
 }
 

@@ -59,10 +59,10 @@ struct TrainerOptions {
   double flow_weight = 1.0;
   double flow_tolerance = 0.05;
   double flow_huber_pixels = 2.0;
-  double disparity_weight = 0.0;
+  double disparity_weight = 1.0;
   // The disparity term on a view's moving pixels only (when it has a
-  // dynamic mask): static ones have stereo.
-  bool disparity_moving_only = true;
+  // dynamic mask), leaving the static ones to stereo alone.
+  bool disparity_moving_only = false;
   // Per-frame appearance (appearance.h): an affine colour transform per
   // training frame applied to its render before the loss, learned at
   // lr_appearance and held near the identity by appearance_weight x

@@ -522,7 +522,7 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
     report.push_back(entry);
   }
   bar.Finish();
-  WriteJson(ws.depth() / "priors.json", report);
+  WriteJson(ws.depth() / "priors.json", {{"frames", report}});
 }
 
 // The moving pixels' depth of neighbouring training frames made to agree
@@ -579,11 +579,11 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
     const cv::Mat scaled = depth[i] * std::exp(scale[i]);
     scaled.copyTo(depth[i], moving[i]);
     WriteDepthMap(order[i]->depth, depth[i]);
-    for (auto& entry : report)
+    for (auto& entry : report.at("frames"))
       if (entry["frame"] == order[i]->name)
         entry["moving_depth_log_scale"] = scale[i];
   }
-  report.push_back({{"moving_depth_pairs", pair_report}});
+  report["moving_depth_pairs"] = pair_report;
   WriteJson(report_file, report);
   PANO4D_LOG(kInfo) << "depth: moving depth made consistent along the flow "
                        "over "
@@ -755,8 +755,9 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
         if (const std::optional<FlowPrior> flow = ReadFlowPrior(*priors, video))
           MakeMovingDepthConsistent(ws, *flow, video, frames);
         else
-          PANO4D_LOG(kWarning) << "depth: --consistent-moving-depth needs "
-                                  "flow among the priors; there is none";
+          PANO4D_LOG(kInfo) << "depth: moving depth aligned per frame only: "
+                               "no flow among the priors to make it "
+                               "consistent along";
       }
     }
   }

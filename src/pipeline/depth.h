@@ -39,8 +39,9 @@ struct DepthOptions {
   double learned_depth_smoothing = 0.08;
   // Rescale each frame's moving pixels' learned depth so that, along the
   // priors' flow between neighbouring frames, their depth changes as much
-  // as the flow stretches them (ConsistentMovingDepthScales); needs flow.
-  bool consistent_moving_depth = false;
+  // as the flow stretches them (ConsistentMovingDepthScales); needs flow,
+  // and without it each frame keeps its own alignment.
+  bool consistent_moving_depth = true;
   int factor = kProtocolFactor;  // a dataset's resolution divisor
   int holdout = 0;  // COLMAP frames: every N-th (i % N == 0) validates
   // Stereo: frames are matched at most this many pixels on the long side

@@ -242,13 +242,15 @@ std::vector<std::string> DescribePriorUse(const PriorsFolder& folder,
         use = "not used: " + layouts.front()->name + " is read instead";
       } else if (kind == PriorKind::kDepth && !depth_instead.empty()) {
         use = "its depth not used: the run takes " + depth_instead +
-              "; the disparity loss (--disparity-weight) may use it";
+              "; the fit's disparity loss (--disparity-weight) uses it";
       } else if (kind == PriorKind::kDepth) {
         use = std::string(l.meaning == DepthMeaning::kMetricDepth
                               ? "scaled"
                               : "aligned (affine in inverse depth)") +
-              " to the SfM points per frame: depth of the moving pixels and "
-              "of static pixels without stereo support";
+              " to the SfM points per frame: depth of the moving pixels "
+              "(rescaled along the flow, when there is flow, to be "
+              "consistent between frames) and of static pixels without "
+              "stereo support; the fit's disparity loss";
       } else if (kind == PriorKind::kFlow) {
         use = "the motion's initial tracks (chained from the canonical "
               "frame) and the flow loss on the dynamic Gaussians";
