@@ -49,6 +49,16 @@ void Reply(int fd, int status, const std::string& reason,
   SendAll(fd, out.str() + (head ? std::string() : body));
 }
 
+// Whether the canonical path `file` lies in the canonical folder `root`.
+bool IsInside(const fs::path& file, const fs::path& root) {
+  auto f = file.begin();
+  for (auto r = root.begin(); r != root.end(); ++r, ++f) {
+    if (r->empty()) continue;  // a trailing separator
+    if (f == file.end() || *f != *r) return false;
+  }
+  return true;
+}
+
 int HexValue(char c) {
   if (c >= '0' && c <= '9') return c - '0';
   if (c >= 'a' && c <= 'f') return c - 'a' + 10;
@@ -97,9 +107,19 @@ fs::path ResolveRequestPath(const fs::path& root, const std::string& target) {
     if (part == "..") return {};
     relative /= part;
   }
-  fs::path file = root / relative;
-  if (fs::is_directory(file)) file /= "index.html";
-  return fs::is_regular_file(file) ? file : fs::path();
+  // Symbolic links are followed, but only to files inside the root; a
+  // name too long, a link loop or any other failure is "not found".
+  std::error_code error;
+  const fs::path real_root = fs::canonical(root, error);
+  if (error) return {};
+  fs::path file = fs::canonical(real_root / relative, error);
+  if (error) return {};
+  if (fs::is_directory(file, error))
+    file = fs::canonical(file / "index.html", error);
+  if (error || !IsInside(file, real_root) ||
+      !fs::is_regular_file(file, error) || error)
+    return {};
+  return file;
 }
 
 StaticServer::StaticServer(fs::path root, int port, PostHandler on_post)
@@ -148,7 +168,17 @@ void StaticServer::Serve() {
     setsockopt(connection, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof(timeout));
     ++open_;
     std::thread([this, connection] {
-      Answer(connection);
+      // Nothing a request does may end the process: any failure answers
+      // this connection alone.
+      try {
+        Answer(connection);
+      } catch (...) {
+        try {
+          Reply(connection, 500, "Internal Server Error", "text/plain",
+                "internal error\n");
+        } catch (...) {
+        }
+      }
       close(connection);
       --open_;
     }).detach();

@@ -58,8 +58,10 @@ class StaticServer {
 std::string ContentTypeFor(const std::filesystem::path& file);
 
 // The file under `root` that the request path names ("/" is index.html),
-// or an empty path for a path that leaves the root (..), is not a regular
-// file or is malformed. %XX escapes are decoded; the query is ignored.
+// canonical, or an empty path for a path that leaves the root (.., or a
+// symbolic link to outside it), is not a regular file, cannot be resolved
+// (a name over the system's limit, a link loop) or is malformed. %XX
+// escapes are decoded; the query is ignored.
 std::filesystem::path ResolveRequestPath(const std::filesystem::path& root,
                                          const std::string& target);
 

@@ -26,6 +26,72 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kSweepFormat = "pano4d-sweep";
+// Version 2: an entry's "command" holds pano4d's arguments; version 1
+// named the program too, and a manifest passed between people must not
+// choose what runs.
+constexpr int kSweepVersion = 2;
+
+// The flags `sweep plan` writes into an entry's `run` command, with
+// whether each takes a value: a manifest may change their values (paths,
+// iterations) but run nothing else, and no flag that starts a program
+// (--prior-cmd).
+const std::map<std::string, bool>& SweepRunFlags() {
+  static const std::map<std::string, bool> kFlags = {
+      {"--dataset", true},          {"--workspace", true},
+      {"--eval", false},            {"--factor", true},
+      {"--iterations", true},       {"--lpips-weights", true},
+      {"--priors", true},           {"--seed", true},
+      {"--deterministic", false},   {"--no-expansion", false},
+      {"--planar-expansion", false}, {"--alpha", true},
+      {"--one-step-expansion", false}, {"--no-gaussian-refinement", false},
+      {"--no-motion", false}};
+  return kFlags;
+}
+
+// Throws an Error naming the manifest, the entry and the field unless
+// `entry` is what `sweep plan` writes at position `position`.
+void CheckSweepEntry(const Json& entry, std::size_t position,
+                     const std::string& file) {
+  const std::string at = "entries[" + std::to_string(position) + "]";
+  if (!entry.is_object())
+    throw Error(file, at, JsonValueForMessage(entry), "is not an object");
+  const std::string source = file + ": " + at;
+  if (GetJson<int>(entry, "index", source) != static_cast<int>(position)) {
+    throw Error(file, at + ".index", entry["index"].dump(),
+                "differs from the entry's position " +
+                    std::to_string(position) + " (entries are numbered 0, 1, "
+                    "...; plan the sweep again)");
+  }
+  for (const char* key : {"scene", "suite", "config", "workspace"})
+    GetJson<std::string>(entry, key, source);
+  GetJson<int>(entry, "seed", source);
+  const Json command = GetJson<Json>(entry, "command", source);
+  if (!command.is_array() || command.empty() || command[0] != "run") {
+    throw Error(file, at + ".command", JsonValueForMessage(command),
+                "must be pano4d's arguments, starting with \"run\"");
+  }
+  std::string workspace;
+  for (std::size_t i = 1; i < command.size(); ++i) {
+    if (!command[i].is_string())
+      throw Error(file, at + ".command", command[i].dump(), "is not a string");
+    const std::string flag = command[i];
+    const auto known = SweepRunFlags().find(flag);
+    if (known == SweepRunFlags().end()) {
+      throw Error(file, at + ".command", flag,
+                  "is not a flag `sweep plan` writes; a manifest runs "
+                  "`pano4d run` with its own flags only");
+    }
+    if (!known->second) continue;
+    if (++i >= command.size() || !command[i].is_string())
+      throw Error(file, at + ".command", flag, "has no value");
+    if (flag == "--workspace") workspace = command[i];
+  }
+  if (workspace != entry["workspace"].get<std::string>()) {
+    throw Error(file, at + ".command", "--workspace " + workspace,
+                "differs from the entry's workspace " +
+                    entry["workspace"].dump());
+  }
+}
 
 fs::path ThisExecutable(const fs::path& given) {
   return given.empty() ? fs::read_symlink("/proc/self/exe") : given;
@@ -91,6 +157,7 @@ Json PlanSweep(const SweepPlanOptions& o) {
                             (config + "_seed" + std::to_string(seed));
         std::vector<std::string> command = BenchRunCommand(
             executable, scene, ws, o.iterations, o.lpips_weights, o.priors);
+        command.erase(command.begin());  // pano4d's arguments only
         command.insert(command.end(), {"--seed", std::to_string(seed)});
         if (o.deterministic) command.push_back("--deterministic");
         for (const std::string& flag : SweepConfigs().at(config))
@@ -106,12 +173,11 @@ Json PlanSweep(const SweepPlanOptions& o) {
     }
   }
   const Json manifest = {{"format", kSweepFormat},
-                         {"version", 1},
+                         {"version", kSweepVersion},
                          {"root", fs::absolute(o.root).string()},
                          {"suite", o.suite},
                          {"seeds", o.seeds},
                          {"configs", o.configs},
-                         {"executable", executable.string()},
                          {"entries", entries}};
   EnsureDirectory(out);
   WriteJson(out / "manifest.json", manifest);
@@ -125,11 +191,23 @@ Json ReadSweepManifest(const fs::path& sweep) {
                     "missing: make it with `pano4d sweep plan --out " +
                         sweep.string() + "`");
   }
+  const std::string file = path.string();
   const Json m = ReadJson(path);
-  if (GetJson<std::string>(m, "format", path.string()) != kSweepFormat)
-    throw Error(path.string(), "format", m["format"].dump(),
+  if (GetJson<std::string>(m, "format", file) != kSweepFormat)
+    throw Error(file, "format", m["format"].dump(),
                 std::string("expected ") + kSweepFormat);
-  GetJson<Json>(m, "entries", path.string());
+  if (GetJson<int>(m, "version", file) != kSweepVersion) {
+    throw Error(file, "version", m["version"].dump(),
+                "this pano4d reads version " + std::to_string(kSweepVersion) +
+                    " (entries hold pano4d's arguments, not a program); "
+                    "plan the sweep again with `pano4d sweep plan`");
+  }
+  const Json entries = GetJson<Json>(m, "entries", file);
+  if (!entries.is_array())
+    throw Error(file, "entries", JsonValueForMessage(entries),
+                "is not an array");
+  for (std::size_t i = 0; i < entries.size(); ++i)
+    CheckSweepEntry(entries[i], i, file);
   return m;
 }
 
@@ -154,19 +232,24 @@ int SweepTaskIndex(int index, std::size_t entries) {
                     "array task ($SLURM_ARRAY_TASK_ID) or a Kubernetes "
                     "Indexed Job ($JOB_COMPLETION_INDEX)");
   }
+  if (entries == 0)
+    throw Error(from, "", std::to_string(index), "the manifest has no entries");
   if (static_cast<std::size_t>(index) >= entries) {
     throw Error(from, "", std::to_string(index),
-                "the manifest has entries 0 to " +
-                    std::to_string(static_cast<long>(entries) - 1));
+                "the manifest has entries 0 to " + std::to_string(entries - 1));
   }
   return index;
 }
 
-SweepOutcome RunSweepEntry(const fs::path& sweep, int index) {
+SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
+                           const fs::path& executable) {
   const Json manifest = ReadSweepManifest(sweep);
-  const Json& entry = manifest["entries"].at(index);
+  const Json& entry =
+      manifest["entries"].at(SweepTaskIndex(index, manifest["entries"].size()));
   const std::vector<std::string> command =
       entry["command"].get<std::vector<std::string>>();
+  std::vector<std::string> argv = {ThisExecutable(executable).string()};
+  argv.insert(argv.end(), command.begin(), command.end());
   Json status = ReadStatus(sweep, index);
   if (status.is_object() && status.value("status", "") == "done" &&
       status.value("command", std::vector<std::string>{}) == command) {
@@ -188,7 +271,7 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index) {
   PANO4D_LOG(kInfo) << "sweep: entry " << index << " (" << entry["scene"]
                     << ", " << entry["config"] << ", seed " << entry["seed"]
                     << "), log " << log.string();
-  const ProcessResult r = RunProcess(command, log);
+  const ProcessResult r = RunProcess(argv, log);
   status["seconds"] = earlier + r.seconds;
   status["peak_memory_mib"] =
       std::max(r.peak_memory_mib, status.value("peak_memory_mib", 0.0));
@@ -339,10 +422,21 @@ SweepTable CollectSweep(const fs::path& sweep) {
     const auto key = std::make_pair(scene, config);
     if (!planned.count(key)) order.push_back(key);
     ++planned[key];
-    const Json s = ReadStatus(sweep, index);
+    Json s = ReadStatus(sweep, index);
+    std::string stale;
+    if (s.is_object() &&
+        (s.value("index", -1) != index ||
+         s.value("command", Json()) != e["command"])) {
+      // Written for another plan of this folder: not this entry's result.
+      s = Json();
+      stale = "its status is of an earlier plan of this folder; `sweep run` "
+              "runs it again";
+    }
     const std::string status =
-        s.is_object() ? s.value("status", "missing") : "missing";
-    const std::string error = s.is_object() ? s.value("error", "") : "";
+        s.is_object() ? s.value("status", "missing")
+                      : (stale.empty() ? "missing" : "stale");
+    const std::string error =
+        s.is_object() ? s.value("error", "") : stale;
     const MetricRow values = s.is_object() && s.contains("metrics")
                                  ? MetricRowFromJson(s["metrics"])
                                  : MetricRow{};
@@ -354,7 +448,7 @@ SweepTable CollectSweep(const fs::path& sweep) {
       seconds[key].push_back(secs);
       memory_of[key].push_back(memory);
     } else {
-      status == "missing" ? ++t.missing : ++t.failed;
+      status == "missing" || status == "stale" ? ++t.missing : ++t.failed;
       t.problems.push_back(
           StringPrintf("%d %s %s seed %d: %s%s", index, scene.c_str(),
                        config.c_str(), e["seed"].get<int>(), status.c_str(),

@@ -6,9 +6,12 @@
 // pool, and collected into one table. Built on `bench datasets`' scene
 // discovery and run command (bench.h).
 //
-//   SWEEP/manifest.json       {"format": "pano4d-sweep", "version": 1,
+//   SWEEP/manifest.json       {"format": "pano4d-sweep", "version": 2,
 //                             "entries": [{"index", "scene", "suite",
-//                             "seed", "config", "workspace", "command"}]}
+//                             "seed", "config", "workspace", "command"}]};
+//                             "command" is pano4d's arguments ("run",
+//                             then the flags `sweep plan` writes), run by
+//                             this pano4d binary
 //   SWEEP/status/<i>.json     per entry: "status" (running, done, failed,
 //                             stopped), "error", "seconds" (all attempts),
 //                             "attempts", "peak_memory_mib", "metrics"
@@ -47,8 +50,10 @@ struct SweepPlanOptions {
 // seed, or what FindBenchScenes refuses.
 Json PlanSweep(const SweepPlanOptions& options);
 
-// The manifest of SWEEP; throws pano4d::Error naming the file when it is
-// missing or not a sweep manifest.
+// The manifest of SWEEP, checked against the schema above; throws
+// pano4d::Error naming the file and the field when it is missing, not a
+// sweep manifest of this version, or an entry lacks a key, is out of
+// order, or its command is not `run` with `sweep plan`'s flags.
 Json ReadSweepManifest(const std::filesystem::path& sweep);
 
 // The entry index a task runs: `index` when it is >= 0, else
@@ -58,11 +63,13 @@ int SweepTaskIndex(int index, std::size_t entries);
 
 enum class SweepOutcome { kDone, kDoneEarlier, kFailed, kStopped };
 
-// Runs entry `index` of SWEEP unless its status says it finished with the
-// same command; writes its status first as running, then as it ended.
-// A run stopped on request (stop_signal.h) is "stopped": its checkpoint
-// is kept and the next attempt resumes it.
-SweepOutcome RunSweepEntry(const std::filesystem::path& sweep, int index);
+// Runs entry `index` of SWEEP (as SweepTaskIndex) with `executable`
+// (empty: this binary) unless its status says it finished with the same
+// command; writes its status first as running, then as it ended. A run
+// stopped on request (stop_signal.h) is "stopped": its checkpoint is kept
+// and the next attempt resumes it.
+SweepOutcome RunSweepEntry(const std::filesystem::path& sweep, int index,
+                           const std::filesystem::path& executable = {});
 
 // Every entry on this machine, `jobs` at a time, each as a child `pano4d
 // sweep run SWEEP --index I`; returns the entries that did not end done.
@@ -100,7 +107,9 @@ struct SweepTable {
 // datasets' table with, per scene and configuration, the mean and the
 // spread (population standard deviation) over the seeds that finished,
 // beside the published rows of the scene's benchmark; failed, stopped and
-// missing entries are listed with their errors, not dropped.
+// missing entries are listed with their errors, not dropped; a status
+// written for another plan of the folder (another command or index) is
+// "stale", not a result.
 SweepTable CollectSweep(const std::filesystem::path& sweep);
 
 }  // namespace pano4d

@@ -60,6 +60,45 @@ TEST(StaticServerTest, ServesFilesWithTheirTypesAndNothingOutsideTheRoot) {
   server.Stop();
 }
 
+// A hostile page in the user's browser can send any request to 127.0.0.1:
+// no request may read outside the served folder or end the process.
+TEST(StaticServerTest, SymlinksOutOfTheRootAndUnresolvablePathsAreNotFound) {
+  testing::TempDir dir;
+  fs::create_directories(dir / "site/sub");
+  testing::WriteText(dir / "site/index.html", "<p>hi</p>");
+  testing::WriteText(dir / "site/sub/in.txt", "INSIDE");
+  testing::WriteText(dir / "secret.txt", "SECRET");
+  fs::create_symlink(dir / "secret.txt", dir / "site/pw.txt");
+  fs::create_directory_symlink(dir.path(), dir / "site/up");
+  fs::create_directory_symlink("/", dir / "site/r");
+  fs::create_symlink(dir / "site/loop_b", dir / "site/loop_a");
+  fs::create_symlink(dir / "site/loop_a", dir / "site/loop_b");
+  fs::create_symlink(dir / "site/sub/in.txt", dir / "site/link_in.txt");
+  StaticServer server(dir / "site", 0);
+  server.ServeInBackground();
+  const std::string long_name(256, 'a');
+  std::string long_path;
+  while (long_path.size() <= 4096) long_path += "/" + std::string(200, 'b');
+  for (const std::string& target :
+       {std::string("/pw.txt"), std::string("/up/secret.txt"),
+        std::string("/r/etc/passwd"), std::string("/loop_a"),
+        std::string("/loop_a/x"), "/" + long_name, long_path}) {
+    const std::string r =
+        Request(server.port(), "GET " + target + " HTTP/1.1\r\n\r\n");
+    EXPECT_NE(r.find("404"), std::string::npos)
+        << target.substr(0, 40) << ": " << r.substr(0, 80);
+    EXPECT_EQ(r.find("SECRET"), std::string::npos) << target;
+    EXPECT_EQ(r.find("root:"), std::string::npos) << target;
+  }
+  // Still up, and a link to a file inside the root is served.
+  const std::string in =
+      Request(server.port(), "GET /link_in.txt HTTP/1.1\r\n\r\n");
+  EXPECT_NE(in.find("INSIDE"), std::string::npos) << in;
+  const std::string index = Request(server.port(), "GET / HTTP/1.1\r\n\r\n");
+  EXPECT_NE(index.find("<p>hi</p>"), std::string::npos) << index;
+  server.Stop();
+}
+
 TEST(StaticServerTest, PostsGoToTheHandlerWithTheirBody) {
   testing::TempDir dir;
   testing::WriteText(dir / "index.html", "x");

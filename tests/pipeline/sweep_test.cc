@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -100,6 +101,92 @@ TEST_F(SweepTest, PlanRunLocalCollectWithAFailingEntry) {
   EXPECT_NE(md.find("| tiny | synth | pano4d default, spread |"),
             std::string::npos)
       << md;
+}
+
+// A manifest is a file passed between people on a cluster: it holds
+// pano4d's `run` arguments and nothing else, and a broken one is refused
+// naming the file and the field (not a crash, not a half-written status).
+TEST_F(SweepTest, ManifestsAreCheckedAgainstTheirSchema) {
+  const fs::path sweep = dir_->path() / "sweep_schema";
+  const fs::path log = dir_->path() / "schema.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --seeds 0,1 --out '" + sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const fs::path file = sweep / "manifest.json";
+  const Json planned = ReadJson(file);
+  EXPECT_EQ(planned["entries"][0]["command"][0], "run");
+  const fs::path marker = dir_->path() / "schema_ran";
+  struct Case {
+    std::string what, expected;
+    std::function<void(Json*)> edit;
+  };
+  const std::vector<Case> cases = {
+      {"no config", "entries[0]", [](Json* m) {
+         (*m)["entries"][0].erase("config");
+       }},
+      {"no scene", "entries[0]", [](Json* m) {
+         (*m)["entries"][0].erase("scene");
+       }},
+      {"no seed", "entries[0]", [](Json* m) {
+         (*m)["entries"][0].erase("seed");
+       }},
+      {"a program", "entries[0].command", [&](Json* m) {
+         (*m)["entries"][0]["command"] = {"/bin/sh", "-c",
+                                          "touch '" + marker.string() + "'"};
+       }},
+      {"a flag that runs a program", "--prior-cmd", [&](Json* m) {
+         auto& c = (*m)["entries"][0]["command"];
+         c.push_back("--prior-cmd");
+         c.push_back("touch '" + marker.string() + "'");
+       }},
+      {"another workspace", "--workspace", [](Json* m) {
+         (*m)["entries"][0]["workspace"] = "/tmp/elsewhere";
+       }},
+      {"a duplicated index", "entries[1].index", [](Json* m) {
+         (*m)["entries"][1]["index"] = 0;
+       }},
+      {"version 1", "version", [](Json* m) { (*m)["version"] = 1; }},
+      {"no entries", "no entries", [](Json* m) {
+         (*m)["entries"] = Json::array();
+       }},
+  };
+  for (const Case& c : cases) {
+    Json m = planned;
+    c.edit(&m);
+    WriteJson(file, m);
+    EXPECT_EQ(RunPano4d("sweep run '" + sweep.string() + "' --index 0", log), 1)
+        << c.what << ": " << Slurp(log);
+    const std::string out = Slurp(log);
+    EXPECT_NE(out.find(c.expected), std::string::npos) << c.what << ": " << out;
+    if (c.what != "no entries")
+      EXPECT_NE(out.find("manifest.json"), std::string::npos) << c.what;
+    EXPECT_FALSE(fs::exists(marker)) << c.what;
+    EXPECT_FALSE(fs::exists(sweep / "status" / "0.json")) << c.what;
+  }
+}
+
+// Planning again into a folder leaves the earlier statuses there: collect
+// must not show them as this plan's results.
+TEST_F(SweepTest, AStatusOfAnEarlierPlanIsStale) {
+  const fs::path sweep = dir_->path() / "sweep_stale";
+  const fs::path log = dir_->path() / "stale.log";
+  const std::string plan = "sweep plan --root '" +
+                           (dir_->path() / "root").string() + "' --out '" +
+                           sweep.string() + "' --iterations ";
+  ASSERT_EQ(RunPano4d(plan + "30", log), 0) << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep run '" + sweep.string() + "' --index 0", log), 0)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0);
+  EXPECT_NE(Slurp(log).find("1 entries, 1 done"), std::string::npos)
+      << Slurp(log);
+  ASSERT_EQ(RunPano4d(plan + "40", log), 0) << Slurp(log);
+  ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0);
+  EXPECT_NE(Slurp(log).find("1 entries, 0 done"), std::string::npos)
+      << Slurp(log);
+  EXPECT_NE(Slurp(sweep / "sweep.md").find("stale"), std::string::npos)
+      << Slurp(sweep / "sweep.md");
 }
 
 // Every configuration's flags are ones `pano4d run` takes with its other
