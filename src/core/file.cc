@@ -132,6 +132,24 @@ void EnsureDirectory(const fs::path& dir) {
   }
 }
 
+void CheckPlainName(const std::string& name, const std::string& source,
+                    const std::string& field) {
+  const char* problem = nullptr;
+  if (name.empty() || name == "." || name == "..")
+    problem = "is not a file name";
+  else if (name.find('/') != std::string::npos ||
+           name.find('\0') != std::string::npos)
+    problem = "holds a '/' or NUL: a name read from a workspace may not "
+              "name a path, least of all one outside the workspace";
+  else if (name.size() > kMaxPlainNameBytes)
+    problem = "is longer than the 200 bytes a name may have here";
+  if (!problem) return;
+  std::string shown = name.substr(0, 80);
+  for (char& c : shown)
+    if (c == '\0') c = '?';
+  throw Error(source, field, shown + (name.size() > 80 ? "..." : ""), problem);
+}
+
 std::string ZeroPadded(std::int64_t value, int width) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%0*lld", width,

@@ -39,6 +39,17 @@ int RemoveLeftoverTemporaries(const std::filesystem::path& dir);
 // Creates `dir` (and parents) or throws an Error naming it.
 void EnsureDirectory(const std::filesystem::path& dir);
 
+// Names read from a workspace file (frame names in frames.json) become
+// file names inside the workspace (renders/val/<name>.png, depth/<name>
+// .npy): throws an Error naming `source` and `field` unless `name` is one
+// plain file name, not empty, without '/' or NUL, not "." or "..", and at
+// most kMaxPlainNameBytes long (room for a suffix and an extension within
+// the 255 bytes a file name may have), so that none of them can name a
+// path outside the workspace or one the system refuses.
+inline constexpr std::size_t kMaxPlainNameBytes = 200;
+void CheckPlainName(const std::string& name, const std::string& source,
+                    const std::string& field);
+
 // `value` with leading zeros to `width` digits, for file names that sort
 // (5: frames and times, "00042"; 2: expansion steps, "03").
 std::string ZeroPadded(std::int64_t value, int width);

@@ -5,12 +5,18 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
+#include "src/core/file.h"
 #include "src/core/json.h"
 #include "src/core/workspace.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
+
+// A camera this far from the origin is a corrupt pose: float32 positions
+// there have no precision left for a scene's detail (the fit, its
+// k-means and its Gaussians work in float).
+constexpr double kMaxPoseTranslation = 1e6;
 
 std::string Stored(const fs::path& workspace, const fs::path& path) {
   if (path.empty()) return "";
@@ -54,9 +60,18 @@ WorkspaceFrame FrameFromJson(const fs::path& ws, const nlohmann::json& j,
                 std::to_string(q.size()) + "/" + std::to_string(t.size()),
                 "expected 4 and 3 numbers");
   }
-  f.camera.cam_from_world =
-      Rigid3d::FromColmap(Eigen::Vector4d(q[0], q[1], q[2], q[3]),
-                          Eigen::Vector3d(t[0], t[1], t[2]));
+  try {
+    f.camera.cam_from_world =
+        Rigid3d::FromColmap(Eigen::Vector4d(q[0], q[1], q[2], q[3]),
+                            Eigen::Vector3d(t[0], t[1], t[2]));
+  } catch (const Error& e) {
+    throw Error(where, e.field(), e.value(), e.problem());
+  }
+  if (f.camera.cam_from_world.translation.norm() > kMaxPoseTranslation) {
+    throw Error(where, "tvec", JsonValueForMessage(j["tvec"]),
+                "is farther than 1e6 scene units from the origin: a corrupt "
+                "pose (no scene pano4d fits is that large)");
+  }
   f.rgb = Loaded(ws, GetJson<std::string>(j, "rgb", where));
   f.depth = Loaded(ws, GetJsonOr<std::string>(j, "depth", "", where));
   f.dynamic_mask =
@@ -84,6 +99,7 @@ void WorkspaceFrames::Check(const std::string& source) const {
   std::set<std::string> names;
   for (const auto* split : {&train, &val}) {
     for (const WorkspaceFrame& f : *split) {
+      CheckPlainName(f.name, source, "name");
       if (!names.insert(f.name).second) {
         throw Error(source, "name", f.name, "appears twice");
       }

@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/core/json.h"
+#include "src/core/workspace.h"
+#include "tests/support/test_files.h"
 
 namespace pano4d {
 namespace {
@@ -45,6 +48,49 @@ TEST(FramesTest, CheckBoundsTimesByTheFrames) {
   frames = TwoFrames();
   frames.train[1].name = frames.train[0].name;
   EXPECT_EQ(CheckField(frames), "name");
+}
+
+// Frame names become file names in the workspace (renders/val/<name>.png):
+// a frames.json from someone else may not make pano4d write outside it.
+// Each refusal names the file and the field.
+TEST(FramesTest, AFramesFileThatNamesPathsOrCorruptPosesIsRefused) {
+  testing::TempDir dir;
+  const std::filesystem::path ws = dir / "ws";
+  WorkspaceFrames frames = TwoFrames();
+  frames.val.push_back(frames.train[1]);
+  frames.val[0].name = "v_00000";
+  WriteWorkspaceFrames(ws, frames);
+  const std::filesystem::path file = Workspace(ws).frames_json();
+  const Json good = ReadJson(file);
+  ASSERT_EQ(ReadWorkspaceFrames(ws).val.size(), 1u);
+  const std::string long_name(300, 'a');
+  struct Case {
+    const char* split;
+    const char* key;
+    Json value;
+    std::string field;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"val", "name", "/tmp/x/absval", "name"},
+           {"val", "name", "../../../x", "name"},
+           {"train", "name", "..", "name"},
+           {"train", "name", "", "name"},
+           {"train", "name", long_name, "name"},
+           {"train", "qvec", Json({0, 0, 0, 0}), "qvec"},
+           {"train", "tvec", Json({1e300, 0, 0}), "tvec"}}) {
+    Json bad = good;
+    bad[c.split][0][c.key] = c.value;
+    WriteJson(file, bad);
+    try {
+      ReadWorkspaceFrames(ws);
+      ADD_FAILURE() << c.key << " " << c.value.dump().substr(0, 40)
+                    << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), c.field) << e.what();
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace
