@@ -12,6 +12,7 @@
 #include "src/core/log.h"
 #include "src/core/stop_signal.h"
 #include "src/core/version.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -64,6 +65,7 @@ int Main(int argc, char** argv) {
   AddViewCommand(app, &action);
   AddSweepCommand(app, &action);
 
+  SetThisCommandLine(argc, argv);  // a workspace lock names its holder
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -13,6 +13,7 @@
 #include "src/core/timer.h"
 #include "src/datasets/synth_generate.h"
 #include "src/pipeline/run.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace {
@@ -65,6 +66,7 @@ void AddDemoCommand(CLI::App& app, Action* action) {
     if (sub->count("--validate-every") == 0)
       f.validate_every = std::max(1, it / kDemoValidations);
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->run.workspace);
       Timer total;
       o->run.dataset = o->run.workspace / "dataset";
       synth::SynthOptions s;

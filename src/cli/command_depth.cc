@@ -9,6 +9,7 @@
 #include "src/cli/options.h"
 #include "src/core/file.h"
 #include "src/pipeline/depth.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -37,6 +38,7 @@ void AddDepthCommand(CLI::App& app, Action* action) {
       "WS/pano4d/tracks/.");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->workspace);
       const Workspace ws(o->workspace);
       RemoveLeftoverTemporaries(ws.root());
       const DepthSummary s = RunDepth(ws, o->depth);

@@ -8,6 +8,7 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/pipeline/expand.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -41,6 +42,7 @@ void AddExpandCommand(CLI::App& app, Action* action) {
       "WS/pano4d/panorama/.");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->workspace);
       const ExpandSummary s = RunExpand(Workspace(o->workspace), o->expand);
       std::printf("%s", s.FullReport().c_str());
       return kExitOk;

@@ -11,6 +11,7 @@
 #include "src/core/file.h"
 #include "src/core/log.h"
 #include "src/pipeline/fit.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -54,6 +55,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
       "equirectangular PNG per time step and static.png).");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->workspace);
       const Workspace ws(o->workspace);
       RemoveLeftoverTemporaries(ws.root());
       std::filesystem::path backup;

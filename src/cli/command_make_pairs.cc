@@ -13,6 +13,7 @@
 #include "src/core/json.h"
 #include "src/gs/trainer.h"
 #include "src/pano/pairs.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -64,7 +65,13 @@ void AddMakePairsCommand(CLI::App& app, Action* action) {
       "generate), src/ and meta.json (directions, angles, cameras), and "
       "OUT/pairs.json.");
   sub->callback(
-      [action, o] { *action = [o] { return RunMakePairsCommand(*o); }; });
+      [action, o] {
+        *action = [o] {
+          const FolderLock lock =
+              LockWorkspace(o->workspace, FolderLock::Mode::kShared);
+          return RunMakePairsCommand(*o);
+        };
+      });
 }
 
 }  // namespace pano4d::cli

@@ -8,6 +8,7 @@
 
 #include "src/cli/app.h"
 #include "src/pipeline/render.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -52,6 +53,8 @@ void AddRenderCommand(CLI::App& app, Action* action) {
       "(the cameras in the camera-file layout, to edit and render again).");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock =
+          LockWorkspace(o->workspace, FolderLock::Mode::kShared);
       const RenderSummary s = RunRender(Workspace(o->workspace), o->render);
       std::printf("%s", s.FullReport().c_str());
       return kExitOk;
@@ -83,6 +86,8 @@ void AddExportCommand(CLI::App& app, Action* action) {
       "Import model).");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock =
+          LockWorkspace(o->workspace, FolderLock::Mode::kShared);
       const ExportSummary s =
           RunExport(Workspace(o->workspace), o->export_options);
       std::printf("%s", s.FullReport().c_str());

@@ -8,6 +8,7 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/pipeline/run.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -51,6 +52,7 @@ void AddRunCommand(CLI::App& app, Action* action) {
       "starts again.");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->workspace);
       RunPipeline(*o, &std::cout);
       return kExitOk;
     };

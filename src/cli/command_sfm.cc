@@ -8,6 +8,7 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/pipeline/sfm.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 
@@ -63,6 +64,7 @@ void AddSfmCommand(CLI::App& app, Action* action) {
       "timings.json); --force redoes all.");
   sub->callback([action, o] {
     *action = [o] {
+      const FolderLock lock = LockWorkspace(o->sfm.workspace);
       std::printf("%s", RunSfmStage(*o).FullReport().c_str());
       return kExitOk;
     };

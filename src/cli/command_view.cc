@@ -7,6 +7,7 @@
 #include "src/cli/app.h"
 #include "src/core/static_server.h"
 #include "src/pipeline/view.h"
+#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -40,7 +41,12 @@ void AddViewCommand(CLI::App& app, Action* action) {
       "-m http.server -d OUT`). Nothing is fetched from the network.");
   sub->callback([action, o] {
     *action = [o] {
-      const ViewSummary s = RunView(Workspace(o->workspace), o->view);
+      ViewSummary s;
+      {  // the workspace is read while the page is written, not served
+        const FolderLock lock =
+            LockWorkspace(o->workspace, FolderLock::Mode::kShared);
+        s = RunView(Workspace(o->workspace), o->view);
+      }
       std::printf("%s", s.FullReport().c_str());
       if (o->serve >= 0) {
         StaticServer server(s.out, o->serve);

@@ -19,6 +19,7 @@
 #include "src/core/strings.h"
 #include "src/core/subprocess.h"
 #include "src/core/workspace.h"
+#include "src/core/workspace_lock.h"
 #include "src/pipeline/bench.h"
 
 namespace pano4d {
@@ -250,6 +251,11 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
       entry["command"].get<std::vector<std::string>>();
   std::vector<std::string> argv = {ThisExecutable(executable).string()};
   argv.insert(argv.end(), command.begin(), command.end());
+  // One process per entry: a second `sweep run` of it is refused, naming
+  // the first, before it touches the status.
+  const FolderLock lock(
+      sweep / "status" / (std::to_string(entry["index"].get<int>()) + ".lock"),
+      FolderLock::Mode::kExclusive, ThisCommandLine());
   Json status = ReadStatus(sweep, index);
   if (status.is_object() && status.value("status", "") == "done" &&
       status.value("command", std::vector<std::string>{}) == command) {

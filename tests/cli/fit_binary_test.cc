@@ -251,6 +251,50 @@ TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
               ReadFileBytes(ckpt));
 }
 
+// Two commands that write one workspace: the second is refused naming the
+// first (its command and PID), readers too, and once the first is killed
+// (SIGKILL: no chance to clean up) the next command takes the lock over.
+TEST_F(FitBinaryTest, ASecondWriterIsRefusedAndAKilledHoldersLockTakenOver) {
+  const fs::path ws = Workspace("ws_lock");
+  const pid_t pid = Spawn({"fit", "--workspace", ws.string(), "--iterations",
+                           "100000", "--no-expansion"},
+                          ws / "fit1.log");
+  ASSERT_GT(pid, 0);
+  const fs::path lock = ws / "pano4d/lock";
+  const std::string holder = "\"pid\":" + std::to_string(pid);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Slurp(lock).find(holder) == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(Slurp(lock).find(holder), std::string::npos)
+      << Slurp(ws / "fit1.log");
+  const std::string ws_arg = " --workspace '" + ws.string() + "'";
+  for (const std::string& second :
+       {"fit" + ws_arg + " --force --iterations 20",
+        "fit" + ws_arg + " --iterations 20",
+        "depth" + ws_arg + " --dataset '" + (dir_->path() / "tiny").string() +
+            "'",
+        "render" + ws_arg + " --out '" + (ws / "r").string() + "'"}) {
+    const fs::path log = ws / "second.log";
+    EXPECT_EQ(RunPano4d(second, log), 1) << second << "\n" << Slurp(log);
+    const std::string out = Slurp(log);
+    EXPECT_NE(out.find("in use by `pano4d fit --workspace"), std::string::npos)
+        << second << "\n" << out;
+    EXPECT_NE(out.find("PID " + std::to_string(pid)), std::string::npos)
+        << out;
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << Slurp(ws / "fit1.log");
+  EXPECT_EQ(RunPano4d("fit" + ws_arg + " --force --iterations 20 "
+                      "--no-expansion",
+                      ws / "fit2.log"),
+            0)
+      << Slurp(ws / "fit2.log");
+}
+
 // Training pairs for a video prior from a workspace's frames and depth.
 TEST_F(FitBinaryTest, MakePairsWritesClipsOfCovisibleVideoMasksAndSource) {
   const fs::path ws = Workspace("ws_pairs");

@@ -14,6 +14,7 @@
 #include "src/core/file.h"
 #include "src/core/json.h"
 #include "src/core/npy.h"
+#include "src/core/workspace_lock.h"
 #include "tests/support/test_files.h"
 
 namespace pano4d {
@@ -165,6 +166,31 @@ TEST_F(SweepTest, ManifestsAreCheckedAgainstTheirSchema) {
     EXPECT_FALSE(fs::exists(marker)) << c.what;
     EXPECT_FALSE(fs::exists(sweep / "status" / "0.json")) << c.what;
   }
+}
+
+// Two `sweep run` of one entry (a requeued task beside its first
+// attempt): the second is refused before it touches the status.
+TEST_F(SweepTest, AnEntryRunsInOneProcessAtATime) {
+  const fs::path sweep = dir_->path() / "sweep_lock";
+  const fs::path log = dir_->path() / "lock.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --iterations 20 --out '" + sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  {
+    const FolderLock first(sweep / "status" / "0.lock",
+                           FolderLock::Mode::kExclusive,
+                           "pano4d sweep run (first)");
+    EXPECT_EQ(RunPano4d("sweep run '" + sweep.string() + "' --index 0", log),
+              1);
+    EXPECT_NE(Slurp(log).find("in use by `pano4d sweep run (first)`"),
+              std::string::npos)
+        << Slurp(log);
+    EXPECT_FALSE(fs::exists(sweep / "status" / "0.json"));
+  }
+  EXPECT_EQ(RunPano4d("sweep run '" + sweep.string() + "' --index 0", log), 0)
+      << Slurp(log);
 }
 
 // Planning again into a folder leaves the earlier statuses there: collect
