@@ -10,8 +10,8 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/log.h"
-#include "src/pipeline/fit.h"
 #include "src/core/workspace_lock.h"
+#include "src/pipeline/fit.h"
 
 namespace pano4d::cli {
 
@@ -80,6 +80,17 @@ void AddFitCommand(CLI::App& app, Action* action) {
               << "fit: the previous fit is kept in " << backup.string();
         }
         throw;
+      }
+      if (s.termination == FitTermination::kStopped && StopRequested()) {
+        // Stopped by the signal before its end: the previous fit's backup
+        // stays (RunFit writes no fit.json), and exit 75 says "run again".
+        std::printf("%s", s.FullReport().c_str());
+        std::printf(
+            "pano4d fit: stopped on request at iteration %lld; the checkpoint "
+            "%s continues with `pano4d fit --workspace %s --resume`\n",
+            static_cast<long long>(s.iterations), ws.checkpoint().c_str(),
+            o->workspace.c_str());
+        return kExitStopped;
       }
       if (!backup.empty()) std::filesystem::remove_all(backup);
       std::printf("%s", s.FullReport().c_str());

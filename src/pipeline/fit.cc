@@ -490,7 +490,8 @@ FitSummary FitController::Run() {
   bar.Finish();
   if (StopRequested()) {
     // Stopped before a time limit: the checkpoint is what counts; the
-    // renders and summary come when the same command resumes.
+    // renders and fit.json come when the same command resumes.
+    Summarise(trainer, ex, &summary);
     summary.seconds.total = total.WallSeconds();
     return summary;
   }

@@ -295,6 +295,51 @@ TEST_F(FitBinaryTest, ASecondWriterIsRefusedAndAKilledHoldersLockTakenOver) {
       << Slurp(ws / "fit2.log");
 }
 
+// SIGUSR1 (a scheduler's warning) to a plain `fit`: exit 75 as `run` does,
+// a report of the iterations done, and --resume goes on from there.
+TEST_F(FitBinaryTest, TheStopSignalExits75WithTheIterationsDone) {
+  const fs::path ws = Workspace("ws_usr1");
+  const fs::path ckpt = ws / "pano4d/checkpoints/fit.ckpt";
+  std::vector<std::string> args = {"fit",          ws.string(),
+                                   "--iterations", "100000",
+                                   "--no-expansion", "--checkpoint-every",
+                                   "5"};
+  args.insert(args.begin() + 1, "--workspace");
+  // Signalled once a checkpoint newer than `after` is on disk (the fit
+  // is in its loop); returns the exit status and the log.
+  const auto signalled = [&](const fs::path& log,
+                             fs::file_time_type after) {
+    const pid_t pid = Spawn(args, log);
+    EXPECT_GT(pid, 0);
+    const auto ready = [&] {
+      std::error_code ec;
+      return fs::exists(ckpt, ec) && fs::last_write_time(ckpt, ec) > after;
+    };
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!ready() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    kill(pid, SIGUSR1);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(signalled(ws / "fit1.log", fs::file_time_type::min()), 75)
+      << Slurp(ws / "fit1.log");
+  const std::string out = Slurp(ws / "fit1.log");
+  EXPECT_EQ(out.find("iterations 0 "), std::string::npos) << out;
+  EXPECT_NE(out.find("stopped on request at iteration "), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("--resume"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(ws / "pano4d/fit.json"));
+  // The same command with --resume goes on (and is stopped again).
+  args.push_back("--resume");
+  ASSERT_EQ(signalled(ws / "fit2.log", fs::last_write_time(ckpt)), 75)
+      << Slurp(ws / "fit2.log");
+  EXPECT_NE(Slurp(ws / "fit2.log").find("resumed from"), std::string::npos)
+      << Slurp(ws / "fit2.log");
+}
+
 // Training pairs for a video prior from a workspace's frames and depth.
 TEST_F(FitBinaryTest, MakePairsWritesClipsOfCovisibleVideoMasksAndSource) {
   const fs::path ws = Workspace("ws_pairs");
