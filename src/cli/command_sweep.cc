@@ -143,6 +143,7 @@ void AddSweepCommand(CLI::App& app, Action* action) {
           "pano4d sweep local: %d entries not done (sweep collect "
           "lists them)\n",
           not_done);
+      if (StopRequested()) return kExitStopped;  // the entries saved theirs
       return not_done == 0 ? kExitOk : kExitError;
     };
   });

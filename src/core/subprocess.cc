@@ -18,6 +18,7 @@
 
 #include "src/core/error.h"
 #include "src/core/file.h"
+#include "src/core/stop_signal.h"
 #include "src/core/timer.h"
 
 extern char** environ;
@@ -131,12 +132,72 @@ int StopGroup(pid_t pid, rusage* usage, const std::string& what) {
   return *status;
 }
 
+// The signal a SignalsForwarded scope received, or 0.
+volatile std::sig_atomic_t g_forward = 0;
+constexpr int kForwardedSignals[] = {SIGINT, SIGTERM, SIGHUP};
+constexpr int kForwardedCount = sizeof(kForwardedSignals) / sizeof(int);
+
+void RememberForForwarding(int signal) {
+  if (g_forward == 0) g_forward = signal;
+}
+
+// Waits for `pid`, passing on the stop signal and a forwarded one once
+// each as they arrive.
+int WaitForwarding(pid_t pid, rusage* usage, const std::string& what) {
+  bool stop_sent = false, forward_sent = false;
+  int status = 0;
+  while (true) {
+    const pid_t done = wait4(pid, &status, WNOHANG, usage);
+    if (done == pid) return status;
+    if (done < 0 && errno != EINTR) {
+      throw Error(what, "", "",
+                  std::string("wait4 failed: ") + std::strerror(errno));
+    }
+    if (!stop_sent && StopRequested()) {
+      ::kill(pid, StopSignal());
+      stop_sent = true;
+    }
+    if (!forward_sent && g_forward != 0) {
+      ::kill(pid, g_forward);
+      forward_sent = true;
+    }
+    ::usleep(kPollMilliseconds * 1000);
+  }
+}
+
 }  // namespace
+
+SignalsForwarded::SignalsForwarded() {
+  static_assert(kForwardedCount == sizeof(old_) / sizeof(old_[0]));
+  g_forward = 0;
+  struct sigaction action {};
+  action.sa_handler = RememberForForwarding;
+  sigemptyset(&action.sa_mask);
+  for (int i = 0; i < kForwardedCount; ++i) {
+    sigaction(kForwardedSignals[i], nullptr, &old_[i]);
+    if (old_[i].sa_handler != SIG_IGN)
+      sigaction(kForwardedSignals[i], &action, nullptr);
+  }
+}
+
+SignalsForwarded::~SignalsForwarded() {
+  for (int i = 0; i < kForwardedCount; ++i)
+    sigaction(kForwardedSignals[i], &old_[i], nullptr);
+  const int received = g_forward;
+  g_forward = 0;
+  if (received != 0) std::raise(received);
+}
+
+int SignalsForwarded::Received() { return g_forward; }
 
 ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
                          const fs::path& log, const ProcessOptions& options) {
   if (argv_strings.empty())
     throw Error("RunProcess", "argv", "", "no executable given");
+  if (options.forward_signals && options.own_group) {
+    throw Error("RunProcess", "forward_signals", "true",
+                "a child in its own group is stopped, not forwarded to");
+  }
   if (options.timeout_seconds > 0 && !options.own_group) {
     throw Error("RunProcess", "timeout_seconds",
                 std::to_string(options.timeout_seconds),
@@ -184,7 +245,9 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
   int status = 0;
   rusage usage{};
   ProcessResult r;
-  if (!options.own_group) {
+  if (options.forward_signals) {
+    status = WaitForwarding(pid, &usage, what);
+  } else if (!options.own_group) {
     while (wait4(pid, &status, 0, &usage) < 0) {
       if (errno != EINTR) {
         throw Error(what, "", "",

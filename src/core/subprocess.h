@@ -4,6 +4,8 @@
 // own stages run as separate processes (bench datasets), each with its
 // output in a log file.
 
+#include <signal.h>
+
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -45,6 +47,30 @@ struct ProcessOptions {
   // Ctrl-C no longer reaches the group by itself. A pano4d killed with
   // SIGKILL cannot pass anything on: the group then runs on by itself.
   bool own_group = false;
+  // Pass on to the child (not its group) what pano4d receives while it
+  // runs, once each: the stop signal (stop_signal.h: it checkpoints and
+  // exits 75) and, inside a SignalsForwarded scope, SIGINT, SIGTERM and
+  // SIGHUP; then wait for it. For pano4d's own children (`sweep run`,
+  // `sweep local`), which save their state when told. Not with own_group.
+  bool forward_signals = false;
+};
+
+// While alive, SIGINT, SIGTERM and SIGHUP (unless ignored) are remembered
+// instead of ending pano4d, for RunProcess calls with forward_signals to
+// pass on; at the end, one that arrived ends pano4d as it would have
+// (after the children it reached have ended). One scope at a time, set up
+// before the threads that run children start.
+class SignalsForwarded {
+ public:
+  SignalsForwarded();
+  ~SignalsForwarded();
+  SignalsForwarded(const SignalsForwarded&) = delete;
+  SignalsForwarded& operator=(const SignalsForwarded&) = delete;
+  // The signal that arrived, or 0.
+  static int Received();
+
+ private:
+  struct sigaction old_[3] {};  // SIGINT, SIGTERM, SIGHUP's actions before
 };
 
 // Runs argv[0] (a path) with argv[1..], stdin from /dev/null, stdout and

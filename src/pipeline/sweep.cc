@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -277,7 +278,12 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
   PANO4D_LOG(kInfo) << "sweep: entry " << index << " (" << entry["scene"]
                     << ", " << entry["config"] << ", seed " << entry["seed"]
                     << "), log " << log.string();
-  const ProcessResult r = RunProcess(argv, log);
+  std::optional<SignalsForwarded> forwarded;
+  forwarded.emplace();  // ends this process after the child, if signalled
+  ProcessOptions forward;
+  forward.forward_signals = true;
+  const ProcessResult r = RunProcess(argv, log, forward);
+  const int signalled = SignalsForwarded::Received();
   status["seconds"] = earlier + r.seconds;
   status["peak_memory_mib"] =
       std::max(r.peak_memory_mib, status.value("peak_memory_mib", 0.0));
@@ -285,6 +291,11 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
   if (r.exit_code == kStoppedExitStatus || (!r.ok() && StopRequested())) {
     status["status"] = "stopped";
     status["error"] = "stopped on request; the next attempt resumes it";
+    outcome = SweepOutcome::kStopped;
+  } else if (!r.ok() && signalled != 0) {
+    status["status"] = "stopped";
+    status["error"] = "stopped by signal " + std::to_string(signalled) +
+                      "; the next attempt resumes it";
     outcome = SweepOutcome::kStopped;
   } else if (!r.ok()) {
     status["status"] = "failed";
@@ -304,6 +315,7 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
     }
   }
   WriteJson(StatusPath(sweep, index), status);
+  forwarded.reset();  // a signal that arrived ends this process now
   return outcome;
 }
 
@@ -314,17 +326,27 @@ int RunSweepLocal(const fs::path& sweep, int jobs, const fs::path& exe) {
   std::atomic<int> next{0}, not_done{0};
   ProgressBar bar("sweep local", n);
   std::mutex bar_mutex;
+  // SIGINT, SIGTERM, SIGHUP and the stop signal reach the running entries
+  // (which save their state), no new entry starts, and this process ends
+  // once they have.
+  const SignalsForwarded forwarded;
+  ProcessOptions forward;
+  forward.forward_signals = true;
   std::vector<std::thread> workers;
   for (int w = 0; w < std::max(1, jobs); ++w) {
     workers.emplace_back([&] {
       for (int i; (i = next++) < n;) {
+        if (StopRequested() || SignalsForwarded::Received() != 0) {
+          ++not_done;
+          continue;
+        }
         const fs::path log =
             sweep / "logs" / (std::to_string(i) + ".local.log");
         EnsureDirectory(log.parent_path());
         const ProcessResult r =
             RunProcess({executable.string(), "sweep", "run", sweep.string(),
                         "--index", std::to_string(i)},
-                       log);
+                       log, forward);
         if (!r.ok()) ++not_done;
         const std::lock_guard<std::mutex> lock(bar_mutex);
         bar.Add();

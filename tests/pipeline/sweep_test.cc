@@ -193,6 +193,46 @@ TEST_F(SweepTest, AnEntryRunsInOneProcessAtATime) {
       << Slurp(log);
 }
 
+// `sweep local` passes SIGTERM (and SIGUSR1) on to the entry it runs,
+// waits for it, starts no other, and ends as the signal says: no entry is
+// left running behind it.
+TEST_F(SweepTest, SweepLocalPassesSignalsOnAndWaits) {
+  for (const std::string signal : {"TERM", "USR1"}) {
+    const fs::path sweep = dir_->path() / ("sweep_local_" + signal);
+    const fs::path log = dir_->path() / ("local_" + signal + ".log");
+    ASSERT_EQ(
+        RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                      "' --seeds 0,1 --iterations 100000 --out '" +
+                      sweep.string() + "'",
+                  log),
+        0)
+        << Slurp(log);
+    const fs::path lock =
+        fs::path(ReadJson(sweep / "manifest.json")["entries"][0]["workspace"]
+                     .get<std::string>()) /
+        "pano4d" / "lock";
+    // Signalled once entry 0's `pano4d run` holds its workspace and fits.
+    const std::string script =
+        "(" + kPano4d + " sweep local '" + sweep.string() +
+        "' --jobs 1 & pid=$!; n=0; until grep -q '\"pid\"' '" +
+        lock.string() + "' 2>/dev/null || [ $n -gt 600 ]; do sleep 0.1; "
+        "n=$((n+1)); done; sleep 2; kill -" + signal +
+        " $pid; wait $pid; echo \"local exit $?\"; rp=$(grep -o "
+        "'\"pid\":[0-9]*' '" + lock.string() + "' | cut -d: -f2); "
+        "if kill -0 $rp 2>/dev/null; then echo 'run alive'; else echo "
+        "'run gone'; fi)";
+    RunLogged(script, log);
+    const std::string out = Slurp(log);
+    EXPECT_NE(out.find(signal == "TERM" ? "local exit 143" : "local exit 75"),
+              std::string::npos)
+        << out;
+    EXPECT_NE(out.find("run gone"), std::string::npos) << out;
+    const Json status = ReadJson(sweep / "status" / "0.json");
+    EXPECT_EQ(status["status"], "stopped") << status.dump();
+    EXPECT_FALSE(fs::exists(sweep / "status" / "1.json"));
+  }
+}
+
 // Planning again into a folder leaves the earlier statuses there: collect
 // must not show them as this plan's results.
 TEST_F(SweepTest, AStatusOfAnEarlierPlanIsStale) {
