@@ -1,4 +1,5 @@
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 
 #include <exception>
 #include <iostream>
@@ -41,7 +42,7 @@ int Main(int argc, char** argv) {
                  "Threads for pano4d's parallel loops; 0: one per core. On "
                  "a machine shared with other work, fewer leave it cores "
                  "(waiting threads sleep rather than spin)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   // Global options may follow the subcommand: `pano4d fit -q --threads 1`.
   app.fallthrough();
@@ -64,6 +65,7 @@ int Main(int argc, char** argv) {
   AddExportCommand(app, &action);
   AddViewCommand(app, &action);
   AddSweepCommand(app, &action);
+  RefuseNonFiniteNumbers(&app);
 
   SetThisCommandLine(argc, argv);  // a workspace lock names its holder
   try {
@@ -79,10 +81,20 @@ int Main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  if (threads > 0) omp_set_num_threads(threads);
   SetLogLevel(verbose ? LogLevel::kDebug
               : quiet ? LogLevel::kWarning
                       : ParseLogLevel(log_level).value_or(LogLevel::kInfo));
+  if (threads > 0) {
+    omp_set_num_threads(threads);
+    const int cores = omp_get_num_procs();
+    if (threads > cores) {
+      PANO4D_LOG(kWarning)
+          << "--threads " << threads << " is more than this machine's "
+          << cores << " cores: every parallel loop then waits for threads "
+          << "that share a core, which is slower, not faster; use at most "
+          << cores;
+    }
+  }
   if (!action) {
     std::cout << app.help();
     return kExitUsage;

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
 #include "src/pipeline/bench.h"
@@ -34,11 +35,11 @@ void AddBenchCamera(CLI::App* bench, Action* action) {
       "Every camera model: round-trip error over the image against ns per "
       "call");
   sub->add_option("--grid", o->grid, "Samples along x (y gets 3/4 as many)")
-      ->check(CLI::Range(2, 4096))
+      ->check(InRange(2, 4096))
       ->capture_default_str();
   sub->add_option("--min-seconds", o->min_seconds,
                   "Minimum timing per measurement")
-      ->check(CLI::Range(0.001, 60.0))
+      ->check(InRange(0.001, 60.0))
       ->capture_default_str();
   sub->add_flag("--json", o->json,
                 "One JSON object per line instead of a table");
@@ -73,7 +74,7 @@ void AddBenchRender(CLI::App* bench, Action* action) {
                   "Image height (with --width: one size)");
   sub->add_option("--repeats", o->repeats,
                   "Timed runs per case; the median is reported")
-      ->check(CLI::Range(1, 1000))
+      ->check(InRange(1, 1000))
       ->capture_default_str();
   sub->add_flag("--json", o->json,
                 "One JSON object per line and case (gaussians, width, height, "

@@ -105,7 +105,7 @@ void AddBenchDatasets(CLI::App* bench, Action* action) {
       ->delimiter(',');
   sub->add_option("--iterations", o->iterations,
                   "Fit iterations per scene (default: run's schedule)")
-      ->check(CLI::PositiveNumber);
+      ->check(Positive());
   AddLpipsWeightsOption(sub, &o->lpips_weights);
   sub->add_option("--priors", o->priors,
                   "A root of learned priors per scene: ROOT/<scene>/ in any layout "

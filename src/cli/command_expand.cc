@@ -30,7 +30,7 @@ void AddExpandCommand(CLI::App& app, Action* action) {
   sub->add_option("--step", o->expand.step,
                   "The step e (angle e x alpha); default: the one after the "
                   "last that ran")
-      ->check(CLI::PositiveNumber);
+      ->check(Positive());
   AddExpansionOptions(sub, &o->expand.fit.expansion);
   AddExpansionProductOptions(sub, &o->expand.fit);
   sub->footer(

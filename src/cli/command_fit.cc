@@ -39,7 +39,8 @@ void AddFitCommand(CLI::App& app, Action* action) {
                 "Start again on a workspace that holds a fit: the previous "
                 "one is kept in WS/pano4d/previous_fit until the new one "
                 "completes (without --force or --resume such a workspace is "
-                "refused)");
+                "refused)")
+      ->excludes("--resume");
   AddFitOptions(sub, &o->fit);
   AddPriorsOptions(sub, &o->fit.priors);
   sub->footer(

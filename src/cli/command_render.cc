@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 #include "src/pipeline/render.h"
 #include "src/core/workspace_lock.h"
 
@@ -38,13 +39,17 @@ void AddRenderCommand(CLI::App& app, Action* action) {
       ->capture_default_str();
   sub->add_option("--time", r->time,
                   "The time shown: bullet time (default the middle), or for "
-                  "a camera file every view's");
+                  "a camera file every view's")
+      ->check(NonNegative());
   sub->add_option("--frames", r->frames, "Frames of orbit, spiral, bullet")
+      ->check(InRange(1, kMaxRenderFrames))
       ->capture_default_str();
   sub->add_option("--degrees", r->degrees,
                   "The arc (orbit, default 360), circle radius (spiral, 10) "
-                  "or swing (bullet, 60)");
+                  "or swing (bullet, 60)")
+      ->check(InRange(0, 720));
   sub->add_option("--fps", r->fps, "Frames per second of the MP4")
+      ->check(InRange(1, 240))
       ->capture_default_str();
   sub->add_option("--out", r->out,
                   "Output folder (default WS/pano4d/renders/<trajectory>)");

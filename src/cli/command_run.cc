@@ -42,7 +42,7 @@ void AddRunCommand(CLI::App& app, Action* action) {
                   "the frames, with the cause it found and what to try (0: "
                   "fit whatever was posed)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(InRange(0.0, 1.0));
   AddFitOptions(sub, &o->fit);
   sub->footer(
       "Writes WS/pano4d/plan.json (the plan, the facts it was made from, and "

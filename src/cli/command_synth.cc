@@ -35,7 +35,7 @@ void AddSynthCommand(CLI::App& app, Action* action) {
   sub->add_option("--dynamic-scale", o->synth.dynamic_scale,
                   "Scale of the moving objects: > 1 makes them cover more "
                   "of the frame (e.g. 2.5 to test SfM's dynamic masks)")
-      ->check(CLI::Range(0.1, 10.0))
+      ->check(InRange(0.1, 10.0))
       ->capture_default_str();
   sub->add_flag("--varied", o->synth.varied,
                 "Draw the camera layout from the seed (validation cameras "

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
+#include "src/cli/options.h"
 #include "src/core/static_server.h"
 #include "src/pipeline/view.h"
 #include "src/core/workspace_lock.h"
@@ -32,7 +33,7 @@ void AddViewCommand(CLI::App& app, Action* action) {
   sub->add_option("--serve", o->serve,
                   "Serve the folder on http://127.0.0.1:PORT/ until Ctrl-C "
                   "(0: any free port)")
-      ->check(CLI::Range(0, 65535));
+      ->check(InRange(0, 65535));
   sub->footer(
       "Writes OUT/index.html, OUT/viewer.js, OUT/lib/ (three.js and Spark, "
       "from npm, with their licences) and the compact 4D scene "

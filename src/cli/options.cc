@@ -1,8 +1,67 @@
 #include "src/cli/options.h"
 
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <optional>
+
 #include <CLI/CLI.hpp>
 
+#include "src/core/strings.h"
+
 namespace pano4d::cli {
+namespace {
+
+// A number in `text` (all of it), or nullopt.
+std::optional<double> ParseNumber(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size()) return std::nullopt;
+  return v;
+}
+
+// A bound as a person writes it: 0, 0.5, 65535, 1e+06.
+std::string BoundText(double v) { return StringPrintf("%g", v); }
+
+CLI::Validator NumberCheck(std::function<bool(double)> ok,
+                           const std::string& what, const std::string& name) {
+  return CLI::Validator(
+      [ok, what](const std::string& text) -> std::string {
+        const std::optional<double> v = ParseNumber(text);
+        if (!v || !std::isfinite(*v) || !ok(*v))
+          return "must be " + what + ", not " + text;
+        return {};
+      },
+      name, name);
+}
+
+}  // namespace
+
+CLI::Validator NonNegative() {
+  return NumberCheck([](double v) { return v >= 0; }, "a number >= 0",
+                     "NONNEGATIVE");
+}
+
+CLI::Validator Positive() {
+  return NumberCheck([](double v) { return v > 0; }, "a number > 0",
+                     "POSITIVE");
+}
+
+CLI::Validator InRange(double lo, double hi) {
+  return NumberCheck([lo, hi](double v) { return v >= lo && v <= hi; },
+                     "a number from " + BoundText(lo) + " to " + BoundText(hi),
+                     "[" + BoundText(lo) + ", " + BoundText(hi) + "]");
+}
+
+void RefuseNonFiniteNumbers(CLI::App* app) {
+  const CLI::Validator finite = NumberCheck(
+      [](double) { return true; }, "a finite number", "");
+  for (CLI::Option* o : app->get_options()) {
+    if (o->get_type_name().rfind("FLOAT", 0) == 0) o->check(finite);
+  }
+  for (CLI::App* sub : app->get_subcommands({})) RefuseNonFiniteNumbers(sub);
+}
+
 
 void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
   app->add_option("--max-gaussians", o->max_gaussians,
@@ -29,13 +88,13 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
                   "(--priors): a moving Gaussian posed at a neighbouring "
                   "frame's time lands where the flow carries its pixel (0: "
                   "off)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_option("--disparity-weight", o->disparity_weight,
                   "Weight of the scale- and shift-invariant loss of the "
                   "rendered inverse depth against learned disparity "
                   "(--priors; 0: off)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_flag("--disparity-moving-only,!--disparity-everywhere",
                 o->disparity_moving_only,
@@ -48,7 +107,7 @@ void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
   app->add_option("--appearance-weight", o->appearance_weight,
                   "How strongly each frame's affine colour transform is held "
                   "near the identity")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_option("--max-static-scale-pixels", o->max_static_scale_pixels,
                   "Largest scale of a static Gaussian, in pixels at the "
@@ -60,7 +119,7 @@ void AddInitOptions(CLI::App* app, InitOptions* o) {
   app->add_option("--num-bases", o->num_bases,
                   "Motion bases K for dynamic content (0: every Gaussian "
                   "static)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_flag(
       "--no-motion", [o](std::int64_t) { o->num_bases = 0; },
@@ -106,7 +165,7 @@ void AddExpansionOptions(CLI::App* app, ExpansionOptions* o) {
                   "relative to those in it; 0: the paper's loss, masked to "
                   "M_e (the Gaussians that fill M_e may then spread over "
                   "the warped content)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_option("--refine-every", o->refine_every,
                   "L_refine on one expanded view every N iterations")
@@ -117,7 +176,7 @@ void AddExpansionOptions(CLI::App* app, ExpansionOptions* o) {
                   "space: seen through by a training frame, or seen by none "
                   "and seen through by an expanded view's warp or by most "
                   "expanded views; 0: only at the steps")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
   app->add_flag("--one-step-expansion", o->one_step,
                 "Ablation: no progressive expansion, one step at the full "
@@ -153,11 +212,11 @@ void AddExpansionProductOptions(CLI::App* app, FitOptions* o) {
                   "command (and all it started) is stopped and the CPU prior "
                   "fills the clip; a video diffusion model on a GPU takes "
                   "minutes per clip")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   app->add_option("--panorama-width", o->panorama_width,
                   "Width of the panoramas in WS/pano4d/panorama (height half)")
-      ->check(CLI::Range(2, 16384))
+      ->check(InRange(2, 16384))
       ->capture_default_str();
 }
 
@@ -206,20 +265,20 @@ void AddFitOptions(CLI::App* app, FitOptions* o) {
          "--iterations", [o](int n) { o->iterations = n; },
          "Training iterations (default: 100 per training frame, 2000 to "
          "10000)")
-      ->check(CLI::PositiveNumber);
+      ->check(Positive());
   AddTrainerOptions(app, &o->trainer);
   app->add_option_function<double>(
          "--depth-weight", [o](double w) { o->depth_weight = w; },
          "Weight of the depth loss (default: 5 on depth the dataset gives, "
          "1 on estimated depth: stereo or --depth-dir)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegative());
   AddInitOptions(app, &o->init);
   app->add_option_function<double>(
          "--voxel-pixels", [o](double v) { o->voxel_pixels = v; },
          "Voxel of the initial point cloud, in pixels at the median depth "
          "(default: 2 on depth the dataset gives, 4 on estimated depth, "
          "whose error would otherwise multiply one surface's points)")
-      ->check(CLI::PositiveNumber);
+      ->check(Positive());
   AddNoExpansionFlag(app, &o->expand);
   AddExpansionOptions(app, &o->expansion);
   AddExpansionProductOptions(app, o);
@@ -268,7 +327,7 @@ void AddFactorOption(CLI::App* app, int* factor) {
                   "Resolution divisor of a dataset's frames; 0: the "
                   "benchmark's protocol (2 for DyCheck and Nvidia, 1 for "
                   "Kubric-4D)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative())
       ->capture_default_str();
 }
 
@@ -308,7 +367,7 @@ void AddPriorsOptions(CLI::App* app, std::filesystem::path* priors,
                     "Correct the learned depth locally towards stereo: a "
                     "Gaussian of this fraction of the frame's width (0: one "
                     "affine per frame only)")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(InRange(0.0, 1.0))
         ->capture_default_str();
     app->add_flag("--consistent-moving-depth,!--no-consistent-moving-depth",
                   depth->consistent_moving_depth,

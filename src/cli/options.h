@@ -18,9 +18,20 @@
 namespace CLI {
 class App;
 class Option;
+class Validator;
 }  // namespace CLI
 
 namespace pano4d::cli {
+
+// Option checks whose messages name the range readably ("must be a number
+// >= 0, not -2") and which refuse NaN and Inf: CLI11's NonNegativeNumber
+// prints its bound with 300 digits, and NaN passes every range test.
+CLI::Validator NonNegative();
+CLI::Validator Positive();
+CLI::Validator InRange(double lo, double hi);
+// Adds a check refusing NaN and Inf to every floating-point option of
+// `app` and its subcommands (Main does, once, after they are built).
+void RefuseNonFiniteNumbers(CLI::App* app);
 
 // --seed into an unsigned seed. A negative value is a usage error
 // (unsigned parsing would wrap -1 to 18446744073709551615).

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -39,6 +40,9 @@ std::string HolderOf(int fd) {
   return holder.str();
 }
 
+// Attempts at a lock whose file a finishing holder removed meanwhile.
+constexpr int kMaxLockAttempts = 100;
+
 std::string Now() {
   const std::time_t t = std::time(nullptr);
   std::tm local{};
@@ -51,19 +55,35 @@ std::string Now() {
 }  // namespace
 
 FolderLock::FolderLock(const fs::path& file, Mode mode,
-                       const std::string& command) {
+                       const std::string& command)
+    : file_(file) {
+  for (fs::path dir = fs::absolute(file).parent_path();
+       !dir.empty() && !fs::exists(dir) && dir != dir.parent_path();
+       dir = dir.parent_path())
+    created_.push_back(dir);
   EnsureDirectory(file.parent_path());
-  // O_CLOEXEC: a child process (COLMAP, a prior command) must not hold it.
-  fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) {
-    throw Error::In(file.string(), std::string("cannot open the lock: ") +
-                                       std::strerror(errno));
-  }
   const int how = mode == Mode::kExclusive ? LOCK_EX : LOCK_SH;
-  int result;
-  do {
-    result = flock(fd_, how | LOCK_NB);
-  } while (result != 0 && errno == EINTR);
+  int result = 0;
+  // A holder that ends removes the file it created (see ~FolderLock): a
+  // lock taken on a file that is no longer at `file` is taken again.
+  for (int attempt = 0;; ++attempt) {
+    // O_CLOEXEC: a child process (COLMAP, a prior command) must not hold
+    // it.
+    fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) {
+      throw Error::In(file.string(), std::string("cannot open the lock: ") +
+                                         std::strerror(errno));
+    }
+    do {
+      result = flock(fd_, how | LOCK_NB);
+    } while (result != 0 && errno == EINTR);
+    struct stat opened {}, named {};
+    if (result != 0 || attempt >= kMaxLockAttempts ||
+        (fstat(fd_, &opened) == 0 && stat(file.c_str(), &named) == 0 &&
+         opened.st_ino == named.st_ino && opened.st_dev == named.st_dev))
+      break;
+    close(fd_);
+  }
   if (result != 0) {
     const int why = errno;
     const std::string holder = HolderOf(fd_);
@@ -97,7 +117,18 @@ FolderLock::FolderLock(const fs::path& file, Mode mode,
 }
 
 FolderLock::~FolderLock() {
-  if (fd_ >= 0) close(fd_);  // releases the flock
+  if (fd_ < 0) return;
+  if (!created_.empty()) {
+    // Removed while held, so that no one else holds it; a later command
+    // creates it again.
+    std::error_code ec;
+    fs::remove(file_, ec);
+    for (const fs::path& dir : created_) {
+      if (!fs::is_empty(dir, ec) || ec) break;
+      fs::remove(dir, ec);
+    }
+  }
+  close(fd_);  // releases the flock
 }
 
 fs::path WorkspaceLockFile(const fs::path& workspace) {

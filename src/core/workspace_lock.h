@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace pano4d {
 
@@ -23,7 +24,10 @@ class FolderLock {
   // Takes the lock on `file` (created, with its folder) for `command`
   // (the command line, for a refusal's message). Throws pano4d::Error
   // naming the file and the holder when another process holds it in a
-  // mode that excludes `mode`.
+  // mode that excludes `mode`. Folders it created for the file are removed
+  // again at the end when nothing else was written in them (a command
+  // that refused its options leaves no workspace behind).
+
   FolderLock(const std::filesystem::path& file, Mode mode,
              const std::string& command);
   FolderLock() = default;  // holds nothing
@@ -33,6 +37,8 @@ class FolderLock {
 
  private:
   int fd_ = -1;
+  std::filesystem::path file_;
+  std::vector<std::filesystem::path> created_;  // innermost first
 };
 
 // The lock of workspace `workspace`: WS/pano4d/lock.

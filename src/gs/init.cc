@@ -213,6 +213,11 @@ void InitOptions::Check() const {
                 std::to_string(dynamic_thickness), "must be zero or positive");
   }
   positive(dynamic_layers, "dynamic_layers");
+  if (dynamic_layers > kMaxDynamicLayers) {
+    throw Error("init options", "dynamic_layers",
+                std::to_string(dynamic_layers),
+                "must be at most " + std::to_string(kMaxDynamicLayers));
+  }
   positive(track_stride, "track_stride");
   positive(min_tracks_per_fit, "min_tracks_per_fit");
   if (!(initial_opacity > 0 && initial_opacity < 1)) {

@@ -22,6 +22,11 @@ namespace pano4d {
 // displacements, then one Procrustes fit (Eigen::umeyama) per cluster and
 // frame. A scene without dynamic pixels gets no dynamic Gaussians and no
 // bases.
+// Each moving pixel seeds this many Gaussians behind it, all of them
+// before max_dynamic thins them: more layers than this only cost memory
+// (a million grew it by 800 MB/s), the object's volume does not need them.
+inline constexpr int kMaxDynamicLayers = 16;
+
 struct InitOptions {
   int pixel_stride = 2;  // static pixels: every stride-th in x and y
   // Voxel edge in pixels at the median depth (world size = median depth x
@@ -42,7 +47,7 @@ struct InitOptions {
   // local width has there (ChordPixels in init.cc). 0 leaves the shell.
   // Measured in docs/experiments/2026-11-24-moving-objects-volume.md.
   double dynamic_thickness = 1.0;
-  int dynamic_layers = 2;
+  int dynamic_layers = 2;  // at most kMaxDynamicLayers
   int track_stride = 3;  // seeds: every stride-th dynamic pixel
   TrackOptions tracks;
   // Fewer valid tracks than this in a cluster at a time: that time's pose

@@ -14,7 +14,9 @@
 #include "src/core/json.h"
 #include "src/core/log.h"
 #include "src/core/median.h"
+#include "src/core/memory.h"
 #include "src/core/npy.h"
+#include "src/core/strings.h"
 #include "src/geometry/inpaint.h"
 #include "src/geometry/point_cloud.h"
 #include "src/gs/init.h"
@@ -23,6 +25,11 @@
 
 namespace pano4d {
 namespace {
+
+// What one expanded view keeps in memory, bytes a pixel: for L_refine over
+// every step its image and mask, and the refined frame (colour and depth)
+// the next step warps from, with a margin.
+constexpr double kExpandedViewBytesPerPixel = 32;
 
 constexpr double kDegrees = M_PI / 180.0;
 // Rendered depth is trusted where the Gaussians are this opaque: at
@@ -313,6 +320,15 @@ void Expansion::Prepare(const SceneEditor& fit) {
     const TrainingView& v = views[order[i]];
     sources_.push_back({order[i], v.camera, v.time});
   }
+  const ExpansionGeometry& g = options_.geometry;
+  CheckMemoryFits(
+      kExpandedViewBytesPerPixel * g.directions * g.steps * sources_.size() *
+          reference_.width * reference_.height,
+      "expansion",
+      StringPrintf("%d directions x %d steps x %zu source frames of %dx%d "
+                   "(--directions, --expansion-steps, --expansion-stride)",
+                   g.directions, g.steps, sources_.size(), reference_.width,
+                   reference_.height));
   frames_seen_.clear();
   for (const TrainingView& v : views) {
     if (v.depth.empty()) continue;

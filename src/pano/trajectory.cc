@@ -19,9 +19,9 @@ constexpr double kMaxPlanarAngle = 89.0 * kDegrees;
 }  // namespace
 
 void ExpansionGeometry::Check() const {
-  if (directions < 1) {
+  if (directions < 1 || directions > kMaxDirections) {
     throw Error("expansion options", "directions", std::to_string(directions),
-                "must be at least 1");
+                "must be 1 to " + std::to_string(kMaxDirections));
   }
   if (steps < 1) {
     throw Error("expansion options", "steps", std::to_string(steps),

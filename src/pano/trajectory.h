@@ -11,6 +11,10 @@
 namespace pano4d {
 
 // The expansion's geometry (DESIGN.md, eqs. dir1 and dir2; paper defaults).
+// One direction a degree about the view axis: more are not distinct views,
+// and each costs a warp and a prior call per step and source frame.
+inline constexpr int kMaxDirections = 360;
+
 struct ExpansionGeometry {
   int directions = 8;           // M
   int steps = 6;                // E

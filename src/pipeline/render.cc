@@ -8,6 +8,7 @@
 #include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
+#include "src/core/memory.h"
 #include "src/core/progress.h"
 #include "src/core/strings.h"
 #include "src/gs/scene4d.h"
@@ -42,6 +43,31 @@ std::vector<TimedCamera> PathCameras(const FittedWorkspace& fitted,
   }
   return VideoCameras(v, RasterCamera::FromPosed(fitted.MiddleFrame().camera),
                       fitted.Center());
+}
+
+// Bytes a rendered pixel takes while its frame is rendered: the
+// rasterizer's colour, depth and alpha planes (20), the float and 8-bit
+// frames (15), per-pixel bookkeeping, with a margin.
+constexpr double kRenderBytesPerPixel = 64;
+
+// Refuses up front (naming the figure) cameras whose frames do not fit in
+// the memory available: every frame is kept for the MP4 (3 bytes a pixel),
+// and one is rendered at a time.
+void CheckRenderMemory(const std::vector<TimedCamera>& cameras) {
+  double kept = 0, largest = 0;
+  int width = 0, height = 0;
+  for (const TimedCamera& c : cameras) {
+    const double pixels = static_cast<double>(c.camera.width) * c.camera.height;
+    kept += 3 * pixels;
+    if (pixels > largest) {
+      largest = pixels;
+      width = c.camera.width;
+      height = c.camera.height;
+    }
+  }
+  CheckMemoryFits(kept + kRenderBytesPerPixel * largest, "render",
+                  StringPrintf("%zu frames, the largest %dx%d", cameras.size(),
+                               width, height));
 }
 
 }  // namespace
@@ -87,6 +113,7 @@ RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
       }
     }
   }
+  CheckRenderMemory(cameras);
   summary.out = o.out.empty() ? ws.renders(summary.name) : o.out;
   EnsureDirectory(summary.out);
   SceneRenderer renderer(fitted.scene);

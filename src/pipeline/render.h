@@ -20,6 +20,10 @@ inline constexpr double kOrbitDegrees = 360.0;
 inline constexpr double kSpiralDegrees = 10.0;
 inline constexpr double kBulletDegrees = 60.0;
 
+// More frames than an hour at 30 fps is a typo: the cameras alone are
+// built before the first frame.
+inline constexpr int kMaxRenderFrames = 108000;
+
 struct RenderOptions {
   // orbit, spiral, bullet, or a camera file
   // ({"views": [{"camera": {...}, "t": T}]}).

@@ -58,5 +58,40 @@ TEST(Pano4dBinaryTest, VersionAndUsage) {
   EXPECT_EQ(RunBinary("bench budget --no-such-flag", dir).status, 64);
 }
 
+// Options outside their range are usage errors (64) that name the option
+// and a readable range (not 300 digits), NaN and Inf included; limits that
+// would exhaust memory are refused before any work.
+TEST(Pano4dBinaryTest, OptionsOutsideTheirRangeReadWell) {
+  testing::TempDir dir;
+  const std::string ws = " --workspace '" + dir.path().string() + "'";
+  const std::vector<std::pair<std::string, std::string>> usage = {
+      {"render" + ws + " --degrees nan", "must be a number from 0 to 720"},
+      {"render" + ws + " --time -1", "must be a number >= 0, not -1"},
+      {"render" + ws + " --frames 2147483647",
+       "must be a number from 1 to 108000"},
+      {"render" + ws + " --fps 0", "must be a number from 1 to 240"},
+      {"fit" + ws + " --flow-weight abc", "must be a number >= 0, not abc"},
+      {"fit" + ws + " --hidden-thickness inf", "must be a finite number"},
+      {"fit" + ws + " --resume --force", "excludes"},
+  };
+  for (const auto& [args, message] : usage) {
+    const Result r = RunBinary(args, dir);
+    EXPECT_EQ(r.status, 64) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+    EXPECT_LT(r.err.size(), 400u) << r.err;
+  }
+  for (const auto& [args, field] :
+       std::vector<std::pair<std::string, std::string>>{
+           {"fit" + ws + " --dynamic-layers 1000000", "dynamic_layers"},
+           {"fit" + ws + " --directions 100000", "directions"}}) {
+    const Result r = RunBinary(args, dir);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(field), std::string::npos) << r.err;
+  }
+  const Result threads = RunBinary("--threads 100000 render" + ws, dir);
+  EXPECT_NE(threads.err.find("more than this machine's"), std::string::npos)
+      << threads.err;
+}
+
 }  // namespace
 }  // namespace pano4d

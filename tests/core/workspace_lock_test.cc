@@ -83,13 +83,25 @@ TEST(FolderLockTest, AKilledHoldersLockIsTakenOver) {
 }
 
 // A reader of a workspace that is not there takes no lock and creates
-// nothing; a writer creates the workspace's folder for its lock.
+// nothing; a writer creates the workspace's folder for its lock, and
+// removes it again when it wrote nothing there (a refused command leaves
+// no workspace), but not a workspace it wrote to.
 TEST(FolderLockTest, LockWorkspaceCreatesOnlyForWriters) {
   testing::TempDir dir;
   { const FolderLock reader = LockWorkspace(dir / "none", Mode::kShared); }
   EXPECT_FALSE(fs::exists(dir / "none"));
-  { const FolderLock writer = LockWorkspace(dir / "ws"); }
-  EXPECT_TRUE(fs::exists(WorkspaceLockFile(dir / "ws")));
+  {
+    const FolderLock writer = LockWorkspace(dir / "ws");
+    EXPECT_TRUE(fs::exists(WorkspaceLockFile(dir / "ws")));
+    EXPECT_NE(Refusal(WorkspaceLockFile(dir / "ws"), Mode::kExclusive), "");
+  }
+  EXPECT_FALSE(fs::exists(dir / "ws"));
+  {
+    const FolderLock writer = LockWorkspace(dir / "ws");
+    testing::WriteText(dir / "ws" / "pano4d" / "frames.json", "{}");
+  }
+  EXPECT_TRUE(fs::exists(dir / "ws" / "pano4d" / "frames.json"));
+  EXPECT_EQ(Refusal(WorkspaceLockFile(dir / "ws"), Mode::kExclusive), "");
 }
 
 }  // namespace

@@ -161,8 +161,9 @@ TEST_F(SweepTest, ManifestsAreCheckedAgainstTheirSchema) {
         << c.what << ": " << Slurp(log);
     const std::string out = Slurp(log);
     EXPECT_NE(out.find(c.expected), std::string::npos) << c.what << ": " << out;
-    if (c.what != "no entries")
+    if (c.what != "no entries") {
       EXPECT_NE(out.find("manifest.json"), std::string::npos) << c.what;
+    }
     EXPECT_FALSE(fs::exists(marker)) << c.what;
     EXPECT_FALSE(fs::exists(sweep / "status" / "0.json")) << c.what;
   }
