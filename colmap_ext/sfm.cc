@@ -284,7 +284,8 @@ std::vector<std::string> WriteFrames(const SfmOptions& o,
                     : !o.images.empty() ? o.images.string()
                                         : std::string("known frames"),
                     "gave " + std::to_string(names.size()) +
-                        " frame(s); SfM needs at least 2 (lower --stride)");
+                        " frame(s); SfM needs at least 2 (a longer "
+                        "capture, or with `pano4d sfm` a lower --stride)");
   }
   return names;
 }
@@ -567,8 +568,13 @@ SfmReport RunSfm(const SfmOptions& o) {
               "point_triangulator",
               PointTriangulatorArgs(database, images_dir, input, sparse / "0"),
               logs / "point_triangulator.log",
-              "too few matches between frames with known poses: lower "
-              "--stride, or try --matcher exhaustive");
+              matcher == "exhaustive"
+                  ? "too few matches between frames with known poses, with "
+                    "every pair already matched: frames this small or this "
+                    "plain give too few features (a lower --factor keeps "
+                    "more pixels)"
+                  : "too few matches between frames with known poses: try "
+                    "--matcher exhaustive");
         });
   } else {
     step(

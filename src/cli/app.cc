@@ -27,7 +27,8 @@ int Main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.footer(
       "Exit status: 0 ok, 1 error (the message names the input), 64 usage "
-      "error.");
+      "error, 75 stopped on request (SIGUSR1) with its state saved: run it "
+      "again (fit: with --resume).");
 
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "debug, info, warning or error")

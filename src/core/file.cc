@@ -81,6 +81,37 @@ int RemoveLeftoverTemporaries(const fs::path& dir) {
   return removed;
 }
 
+OutputFolder::OutputFolder(fs::path dir, const std::string& command,
+                           const std::string& stale)
+    : dir_(std::move(dir)) {
+  EnsureDirectory(dir_);
+  RemoveLeftoverTemporaries(dir_);
+  WriteFileAtomically(
+      dir_ / kMarker,
+      "Written by `" + command + "` (PID " + std::to_string(::getpid()) +
+          "), which has not completed: the files here may mix its output "
+          "with an earlier run's. Run it again; it removes this file when it "
+          "completes.\n");
+  if (stale.empty()) return;
+  const std::regex pattern(stale);
+  std::error_code ec;
+  std::vector<fs::path> old;
+  for (auto it = fs::recursive_directory_iterator(dir_, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    const std::string relative =
+        it->path().lexically_relative(dir_).generic_string();
+    if (it->is_regular_file(ec) && std::regex_match(relative, pattern))
+      old.push_back(it->path());
+  }
+  for (const fs::path& p : old) fs::remove(p, ec);
+}
+
+void OutputFolder::Complete() {
+  std::error_code ec;
+  fs::remove(dir_ / kMarker, ec);
+  if (ec) throw Error::In((dir_ / kMarker).string(), ec.message());
+}
+
 fs::path TemporaryPathFor(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
   const std::string infix = ".tmp." + std::to_string(::getpid()) + "." +

@@ -36,6 +36,26 @@ void WriteFileAtomically(const std::filesystem::path& path,
 // counted. `fit`, `depth` and `run` call it on their workspace first.
 int RemoveLeftoverTemporaries(const std::filesystem::path& dir);
 
+// A folder of many files written by one command (export, render, view):
+// while the command runs, `dir`/INCOMPLETE says so (and which command), so
+// that a folder an interrupted run left, its new files beside an earlier
+// run's, is never taken for a finished one. The constructor first removes
+// the temporaries a killed run left there and every file of an earlier
+// output that matches `stale` (a regex on the path relative to `dir`, for
+// the numbered files a shorter new output would not overwrite);
+// Complete() removes the marker.
+class OutputFolder {
+ public:
+  OutputFolder(std::filesystem::path dir, const std::string& command,
+               const std::string& stale = "");
+  void Complete();
+  const std::filesystem::path& dir() const { return dir_; }
+  static constexpr const char* kMarker = "INCOMPLETE";
+
+ private:
+  std::filesystem::path dir_;
+};
+
 // Creates `dir` (and parents) or throws an Error naming it.
 void EnsureDirectory(const std::filesystem::path& dir);
 

@@ -240,7 +240,11 @@ struct CheckpointFile {
     Read("logits", &scene.logits);
     Read("bases.rotations", &scene.bases.rotations);
     Read("bases.translations", &scene.bases.translations);
-    scene.Check();
+    try {
+      scene.Check();
+    } catch (const Error& e) {  // the file's content: name the file
+      throw Error::In(source, e.what());
+    }
     return scene;
   }
 };

@@ -9,8 +9,14 @@
 namespace pano4d {
 
 void GaussianScene::Check() const {
-  statics.Check();
-  dynamics.Check();
+  for (const auto& [model, name] :
+       {std::pair{&statics, "statics."}, std::pair{&dynamics, "dynamics."}}) {
+    try {
+      model->Check();
+    } catch (const Error& e) {
+      throw Error("scene", name + e.field(), e.value(), e.problem());
+    }
+  }
   bases.Check();
   if (statics.sh_degree != dynamics.sh_degree) {
     throw Error("scene", "sh_degree", std::to_string(dynamics.sh_degree),

@@ -183,7 +183,10 @@ std::string ReplaceAll(std::string text, const std::string& from,
 }
 
 std::string ShellQuote(const std::string& text) {
-  return "'" + ReplaceAll(text, "'", "'\\''") + "'";
+  std::string quoted(1, '\'');  // appended, not `"'" + ...`: GCC 12 warns
+  quoted += ReplaceAll(text, "'", "'\\''");  // falsely (-Wrestrict) there
+  quoted += '\'';
+  return quoted;
 }
 
 // A clip name as one folder name: no separators, no "..".

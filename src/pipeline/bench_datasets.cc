@@ -221,22 +221,34 @@ std::vector<BenchScene> FindBenchScenes(const fs::path& root,
   for (const auto& entry : fs::directory_iterator(root))
     if (entry.is_directory()) dirs.push_back(entry.path());
   std::sort(dirs.begin(), dirs.end());
+  constexpr const char* kNotAScene =
+      "is not a scene in a layout pano4d reads (DyCheck's splits/ and "
+      "camera/, Nvidia's poses_bounds.npy, Kubric-4D's metadata)";
   for (const fs::path& dir : dirs) {
-    const std::string found = SuiteOf(dir);
-    if (found.empty() || (!suite.empty() && found != suite)) continue;
     const std::string name = dir.filename().string();
     if (!names.empty() &&
         std::find(names.begin(), names.end(), name) == names.end())
       continue;
+    const std::string found = SuiteOf(dir);
+    if (found.empty()) {
+      PANO4D_LOG(kWarning) << "bench: " << dir.string() << " left out: it "
+                           << kNotAScene;
+      continue;
+    }
+    if (!suite.empty() && found != suite) continue;
     scenes.push_back({dir, found});
   }
   for (const std::string& wanted : names) {
     if (std::none_of(scenes.begin(), scenes.end(), [&](const BenchScene& s) {
           return s.dir.filename() == wanted;
         })) {
+      const fs::path dir = root / wanted;
+      if (fs::is_directory(dir) && SuiteOf(dir).empty())
+        throw Error(dir.string(), "--scenes", wanted, kNotAScene);
       throw Error(root.string(), "--scenes", wanted,
-                  "no scene folder of that name" +
-                      (suite.empty() ? std::string() : " in suite " + suite));
+                  fs::is_directory(dir)
+                      ? "is a scene of suite " + SuiteOf(dir) + ", not " + suite
+                      : std::string("no scene folder of that name"));
     }
   }
   if (scenes.empty()) {

@@ -23,6 +23,11 @@ std::string LowerExtension(const std::filesystem::path& path) {
 }
 
 std::string GuessKind(const std::filesystem::path& path) {
+  if (std::filesystem::is_directory(path)) {
+    throw Error::In(path.string(),
+                    "is a folder: `pano4d inspect` reads one file; `pano4d "
+                    "dataset info` describes a dataset or priors folder");
+  }
   const std::string ext = LowerExtension(path);
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr")
     return "image";

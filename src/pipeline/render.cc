@@ -11,6 +11,7 @@
 #include "src/core/memory.h"
 #include "src/core/progress.h"
 #include "src/core/strings.h"
+#include "src/core/workspace_lock.h"
 #include "src/gs/scene4d.h"
 #include "src/pano/trajectory_io.h"
 #include "src/pipeline/scene_outputs.h"
@@ -115,7 +116,7 @@ RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
   }
   CheckRenderMemory(cameras);
   summary.out = o.out.empty() ? ws.renders(summary.name) : o.out;
-  EnsureDirectory(summary.out);
+  OutputFolder folder(summary.out, ThisCommandLine(), R"([0-9]{5}\.png)");
   SceneRenderer renderer(fitted.scene);
   ProgressBar bar("render " + summary.name,
                   static_cast<std::int64_t>(cameras.size()));
@@ -135,6 +136,7 @@ RenderSummary RunRender(const Workspace& ws, const RenderOptions& o) {
   const fs::path video = summary.out / (summary.name + ".mp4");
   if (WriteVideo(video, frames, o.fps, &summary.notes)) summary.video = video;
   summary.frames = frames.size();
+  folder.Complete();
   return summary;
 }
 
@@ -155,6 +157,8 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
   const FittedWorkspace fitted = LoadFittedWorkspace(ws);
   ExportSummary summary;
   summary.out = o.out.empty() ? ws.export_dir() : o.out;
+  OutputFolder folder(summary.out, ThisCommandLine(),
+                      R"(ply/(t_[0-9]+|static)\.ply)");
   const fs::path ply = summary.out / "ply";
   EnsureDirectory(ply);
   const GaussianScene& scene = fitted.scene;
@@ -204,6 +208,7 @@ ExportSummary RunExport(const Workspace& ws, const ExportOptions& o) {
   summary.scene4d_bytes = WriteScene4d(summary.out, scene, SceneExtras(fitted));
   for (const Json& f : files)
     summary.ply_bytes += fs::file_size(ply / f["file"].get<std::string>());
+  folder.Complete();
   return summary;
 }
 

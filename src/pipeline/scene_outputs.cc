@@ -40,6 +40,15 @@ FittedWorkspace LoadFittedWorkspace(const Workspace& ws) {
   FittedWorkspace w;
   w.frames = ReadWorkspaceFrames(ws.root());
   const fs::path ckpt = ws.checkpoint();
+  if (!fs::exists(ckpt) && fs::exists(ws.previous_fit())) {
+    throw Error::In(ckpt.string(),
+                    "missing: a `pano4d fit --force` started over and has not "
+                    "completed (stopped, or still running); the fit before it "
+                    "is in " +
+                        ws.previous_fit().string() +
+                        ": let the new fit complete (`pano4d fit --resume`), "
+                        "or move that folder's contents back");
+  }
   if (!fs::exists(ckpt)) {
     throw Error(ckpt.string(), "", "",
                 "missing; run `pano4d fit --workspace " + ws.root().string() +
@@ -76,6 +85,9 @@ cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
   return Image::FromRgb32f(rgb).ToBgr8();
 }
 
+// Less room than this after writing a video: it was probably cut short.
+constexpr std::uintmax_t kMinVideoDiskBytes = 1u << 20;
+
 bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
                 double fps, std::vector<std::string>* notes) {
   if (frames.empty()) return false;
@@ -86,14 +98,31 @@ bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
   cv::VideoWriter writer(partial.string(),
                          cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
                          frames.front().size());
+  // OpenCV reports neither why it could not open a writer nor a failed
+  // write: a disk with almost no room left is the likely cause to name.
+  const auto disk_full = [&] {
+    std::error_code ec;
+    const fs::space_info space = fs::space(path.parent_path(), ec);
+    return !ec && space.available < kMinVideoDiskBytes;
+  };
   if (!writer.isOpened()) {
     notes->push_back(path.filename().string() +
-                     ": OpenCV could not open an MP4 writer (no FFmpeg "
-                     "backend?); the PNG frames have the same views");
+                     (disk_full() ? ": the disk holding it is full"
+                                  : ": OpenCV could not open an MP4 writer (no "
+                                    "FFmpeg backend?)") +
+                     "; the PNG frames have the same views");
     return false;
   }
   for (const cv::Mat& f : frames) writer.write(f);
   writer.release();
+  std::error_code ec;
+  if (disk_full() || !fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
+    fs::remove(partial, ec);
+    notes->push_back(path.filename().string() +
+                     ": not written in full (the disk holding it is full?); "
+                     "the PNG frames have the same views");
+    return false;
+  }
   fs::rename(partial, path);
   return true;
 }

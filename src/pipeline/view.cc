@@ -5,6 +5,7 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/strings.h"
+#include "src/core/workspace_lock.h"
 #include "src/gs/scene4d.h"
 
 namespace pano4d {
@@ -112,7 +113,7 @@ ViewSummary RunView(const Workspace& ws, const ViewOptions& o) {
   const FittedWorkspace fitted = LoadFittedWorkspace(ws);
   ViewSummary summary;
   summary.out = o.out.empty() ? ws.pano4d() / "view" : o.out;
-  EnsureDirectory(summary.out);
+  OutputFolder folder(summary.out, ThisCommandLine());
   for (const Copied& c : kPageFiles) {
     const fs::path to = summary.out / c.to;
     WriteAtomically(to, [&](const fs::path& tmp) {
@@ -136,6 +137,7 @@ ViewSummary RunView(const Workspace& ws, const ViewOptions& o) {
         std::to_string(scene.statics.sh_degree) +
         " view dependence is in scene4d.bin but not shown");
   }
+  folder.Complete();
   return summary;
 }
 

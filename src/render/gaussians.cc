@@ -1,5 +1,8 @@
 #include "src/render/gaussians.h"
 
+#include <cmath>
+#include <string>
+
 #include "src/core/error.h"
 
 namespace pano4d {
@@ -32,6 +35,31 @@ void GaussianModelT<T>::Check() const {
   expect(log_scales, 3, "log_scales");
   expect(quats, 4, "quats");
   expect(sh, static_cast<std::size_t>(sh_coefficients()) * 3, "sh");
+  expect(opacities, 1, "opacities");
+  // Every value finite, every rotation a quaternion that is not zero (it
+  // has no direction to normalise to): a file that breaks either is
+  // corrupt, and would reach a PLY or a render as NaN.
+  const auto finite = [&](const std::vector<T>& v, const char* name) {
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      if (!std::isfinite(v[i])) {
+        throw Error("gaussians", std::string(name) + "[" + std::to_string(i) +
+                                     "]",
+                    std::to_string(v[i]), "not finite");
+      }
+    }
+  };
+  finite(means, "means");
+  finite(log_scales, "log_scales");
+  finite(quats, "quats");
+  finite(opacities, "opacities");
+  finite(sh, "sh");
+  for (std::size_t i = 0; i < n; ++i) {
+    const T* q = &quats[4 * i];
+    if (q[0] == 0 && q[1] == 0 && q[2] == 0 && q[3] == 0) {
+      throw Error("gaussians", "quats[" + std::to_string(i) + "]", "0 0 0 0",
+                  "a rotation needs a non-zero quaternion");
+    }
+  }
 }
 
 template <typename T>

@@ -58,6 +58,27 @@ TEST(Pano4dBinaryTest, VersionAndUsage) {
   EXPECT_EQ(RunBinary("bench budget --no-such-flag", dir).status, 64);
 }
 
+// Errors that say what is wrong with the input as it is: a folder given
+// to inspect, a folder that exists but is not a scene.
+TEST(Pano4dBinaryTest, FoldersThatAreNotWhatWasAskedForAreNamedAsSuch) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir / "root" / "notascene");
+  testing::WriteText(dir / "root" / "notascene" / "readme.txt", "hello");
+  const Result inspect = RunBinary("inspect '" + dir.path().string() + "'", dir);
+  EXPECT_EQ(inspect.status, 1);
+  EXPECT_NE(inspect.err.find("is a folder"), std::string::npos) << inspect.err;
+  const Result bench =
+      RunBinary("bench datasets --root '" + (dir / "root").string() +
+                    "' --scenes notascene --workspace '" +
+                    (dir / "ws").string() + "'",
+                dir);
+  EXPECT_EQ(bench.status, 1);
+  EXPECT_NE(bench.err.find("notascene"), std::string::npos) << bench.err;
+  EXPECT_NE(bench.err.find("is not a scene in a layout pano4d reads"),
+            std::string::npos)
+      << bench.err;
+}
+
 // Options outside their range are usage errors (64) that name the option
 // and a readable range (not 300 digits), NaN and Inf included; limits that
 // would exhaust memory are refused before any work.

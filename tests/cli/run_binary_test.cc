@@ -332,7 +332,16 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
             1);
   EXPECT_NE(Slurp(log).find("--time"), std::string::npos) << Slurp(log);
 
+  // What an earlier, longer export and a SIGTERM during one leave behind:
+  // neither may stay beside the new files.
+  fs::create_directories(ws / "pano4d/export/ply");
+  testing::WriteText(ws / "pano4d/export/ply/t_00099.ply", "an earlier run's");
+  testing::WriteText(ws / "pano4d/export/ply/t_00004.tmp.999999999.4.ply",
+                     "a killed run's temporary");
   ASSERT_EQ(RunPano4d("export" + w, log), 0) << Slurp(log);
+  EXPECT_FALSE(fs::exists(ws / "pano4d/export/ply/t_00099.ply"));
+  EXPECT_FALSE(fs::exists(ws / "pano4d/export/ply/t_00004.tmp.999999999.4.ply"));
+  EXPECT_FALSE(fs::exists(ws / "pano4d/export/INCOMPLETE"));
   const nlohmann::json frames = ReadJson(ws / "pano4d/frames.json");
   int plys = 0;
   for (const auto& e : fs::directory_iterator(ws / "pano4d/export/ply"))

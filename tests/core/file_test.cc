@@ -65,6 +65,28 @@ TEST(FileTest, LeftoverTemporariesOfDeadProcessesAreRemoved) {
   EXPECT_EQ(RemoveLeftoverTemporaries(dir / "missing"), 0);
 }
 
+// A folder being written says so until it is complete, and an earlier
+// output's numbered files go first (a shorter new output leaves none).
+TEST(FileTest, AnOutputFolderIsMarkedIncompleteUntilDone) {
+  TempDir dir;
+  const std::filesystem::path out = dir / "export";
+  WriteFileAtomically(out / "ply" / "t_00007.ply", "old");
+  WriteFileAtomically(out / "notes.txt", "the user's");
+  {
+    OutputFolder folder(out, "pano4d export", R"(ply/t_[0-9]+\.ply)");
+    EXPECT_TRUE(std::filesystem::exists(out / OutputFolder::kMarker));
+    EXPECT_NE(ReadTextFile(out / OutputFolder::kMarker).find("pano4d export"),
+              std::string::npos);
+    EXPECT_FALSE(std::filesystem::exists(out / "ply" / "t_00007.ply"));
+    EXPECT_TRUE(std::filesystem::exists(out / "notes.txt"));
+    // Killed here: the marker stays.
+  }
+  EXPECT_TRUE(std::filesystem::exists(out / OutputFolder::kMarker));
+  OutputFolder again(out, "pano4d export");
+  again.Complete();
+  EXPECT_FALSE(std::filesystem::exists(out / OutputFolder::kMarker));
+}
+
 TEST(FileTest, FailedWriteKeepsThePreviousVersion) {
   TempDir dir;
   const auto path = dir / "checkpoint.bin";

@@ -131,6 +131,21 @@ TEST(Scene4dTest, RefusesNonFiniteValues) {
   }
 }
 
+// A zero quaternion (a corrupt or hand-made file) has no rotation: it must
+// not reach an exported PLY or a render.
+TEST(Scene4dTest, RefusesAZeroQuaternion) {
+  GaussianScene scene = MovingScene(0);
+  std::fill_n(scene.statics.quats.begin() + 4 * 7, 4, 0.0f);
+  try {
+    EncodeScene4d(scene);
+    FAIL() << "a zero quaternion was encoded";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("statics.quats[7]"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Scene4dTest, RefusesATruncatedBinaryAndAnotherFormat) {
   const EncodedScene4d encoded = EncodeScene4d(MovingScene(0));
   const std::string cut = encoded.binary.substr(0, encoded.binary.size() / 2);
