@@ -5,14 +5,16 @@
 # input that takes over 10 s stops the run and leaves the input in
 # build-fuzz/ (crash-*, oom-*, timeout-*).
 #   scripts/fuzz.sh [SECONDS] [TARGET...]   targets: npy json colmap_binary
-#   colmap_text checkpoint (default: all). json covers the camera JSON and
-#   DyCheck's camera and split readers.
+#   colmap_text checkpoint frames trajectory scene4d sweep (default: all).
+#   json covers the camera JSON and DyCheck's camera and split readers;
+#   frames a workspace's frames.json; trajectory camera files and
+#   trajectories.json; sweep a sweep's manifest and status files.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${1:-300}
 shift || true
 TARGETS=("$@")
-((${#TARGETS[@]})) || TARGETS=(npy json colmap_binary colmap_text checkpoint)
+((${#TARGETS[@]})) || TARGETS=(npy json colmap_binary colmap_text checkpoint frames trajectory scene4d sweep)
 
 bash scripts/setup.sh >/dev/null  # the Debian packages the project needs
 source scripts/apt.sh
@@ -32,8 +34,8 @@ for target in "${TARGETS[@]}"; do
   cp -n tests/fuzz/seeds/"$target"/* "$corpus"/ 2>/dev/null || true
   [[ $target == npy ]] && cp -n tests/data/npy/*.npy "$corpus"/
   # The checkpoint seed is written by the target itself, in today's format.
-  [[ $target == checkpoint ]] &&
-    PANO4D_FUZZ_WRITE_SEED="$corpus/seed.ckpt" \
+  [[ $target == checkpoint || $target == scene4d ]] &&
+    PANO4D_FUZZ_WRITE_SEED="$corpus/seed.$target" \
       "build-fuzz/tests/fuzz/pano4d_${target}_fuzzer" -runs=0 >/dev/null 2>&1
   echo "pano4d fuzz: $target for $SECONDS_EACH s"
   (cd build-fuzz && "./tests/fuzz/pano4d_${target}_fuzzer" "corpus/$target" \

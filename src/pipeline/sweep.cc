@@ -103,13 +103,43 @@ fs::path StatusPath(const fs::path& sweep, int index) {
   return sweep / "status" / (std::to_string(index) + ".json");
 }
 
+// Throws an Error naming the file and the key unless each key of a status
+// that is there has the type `sweep run` writes.
+void CheckStatus(const Json& s, const std::string& file) {
+  if (!s.is_object())
+    throw Error(file, "", JsonValueForMessage(s), "is not an object");
+  const auto check = [&](const char* key, bool ok) {
+    if (s.contains(key) && !ok)
+      throw Error(file, key, JsonValueForMessage(s[key]), "has the wrong type");
+  };
+  check("index", s.value("index", Json()).is_number_integer());
+  check("seed", s.value("seed", Json()).is_number_integer());
+  check("attempts", s.value("attempts", Json()).is_number_integer());
+  for (const char* key : {"status", "error", "scene", "config", "host"})
+    check(key, s.value(key, Json()).is_string());
+  for (const char* key : {"seconds", "peak_memory_mib"})
+    check(key, s.value(key, Json()).is_number());
+  check("command", s.value("command", Json()).is_array());
+  check("metrics", s.value("metrics", Json()).is_object());
+  if (s.contains("metrics")) {
+    for (const auto& [key, value] : s["metrics"].items())
+      if (!value.is_number() && !value.is_null())
+        throw Error(file, "metrics." + key, JsonValueForMessage(value),
+                    "is not a number");
+  }
+}
+
+// The status of entry `index`, or null when there is none or it is not
+// one `sweep run` wrote (a hand edit; torn writes cannot happen).
 Json ReadStatus(const fs::path& sweep, int index) {
   const fs::path path = StatusPath(sweep, index);
   if (!fs::exists(path)) return Json();
   try {
-    return ReadJson(path);
-  } catch (const Error& e) {  // a torn write cannot happen; a hand edit can
-    PANO4D_LOG(kWarning) << "sweep: " << e.what();
+    Json status = ReadJson(path);
+    CheckStatus(status, path.string());
+    return status;
+  } catch (const Error& e) {
+    PANO4D_LOG(kWarning) << "sweep: " << e.what() << "; taken as no status";
     return Json();
   }
 }

@@ -234,6 +234,30 @@ TEST_F(SweepTest, SweepLocalPassesSignalsOnAndWaits) {
   }
 }
 
+// A status file of the wrong types (a hand edit) is named and taken as no
+// status, not a raw JSON-library error that stops collect.
+TEST_F(SweepTest, AStatusOfTheWrongTypesIsNamedAndIgnored) {
+  const fs::path sweep = dir_->path() / "sweep_bad_status";
+  const fs::path log = dir_->path() / "bad_status.log";
+  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                          "' --out '" + sweep.string() + "'",
+                      log),
+            0)
+      << Slurp(log);
+  const Json entry = ReadJson(sweep / "manifest.json")["entries"][0];
+  WriteJson(sweep / "status" / "0.json",
+            {{"index", 0},
+             {"command", entry["command"]},
+             {"status", "done"},
+             {"seconds", "abc"}});
+  ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0)
+      << Slurp(log);
+  EXPECT_NE(Slurp(log).find("0.json: field 'seconds'"), std::string::npos)
+      << Slurp(log);
+  EXPECT_NE(Slurp(log).find("1 entries, 0 done"), std::string::npos)
+      << Slurp(log);
+}
+
 // Planning again into a folder leaves the earlier statuses there: collect
 // must not show them as this plan's results.
 TEST_F(SweepTest, AStatusOfAnEarlierPlanIsStale) {
