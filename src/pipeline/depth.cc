@@ -223,6 +223,18 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
     cv::Mat depth = ReadDepthMap(files[i]);
     const int w = f.camera.camera.width, h = f.camera.camera.height;
     if (depth.cols != w || depth.rows != h) {
+      // Resized, but never stretched: another aspect ratio is another
+      // frame's map, or a transposed one.
+      const double a = static_cast<double>(depth.cols) / depth.rows;
+      if (std::abs(a / (static_cast<double>(w) / h) - 1.0) >
+          kMaxAspectDifference) {
+        throw Error(files[i].string(), "size",
+                    std::to_string(depth.cols) + "x" +
+                        std::to_string(depth.rows),
+                    "another aspect ratio than its frame " + f.name + " (" +
+                        std::to_string(w) + "x" + std::to_string(h) +
+                        "): another frame's map, or width and height swapped");
+      }
       cv::Mat resized;
       // Nearest: interpolating across depth edges invents surfaces.
       cv::resize(depth, resized, cv::Size(w, h), 0, 0, cv::INTER_NEAREST);

@@ -151,7 +151,18 @@ TEST_F(DepthStageTest, ExternalDepthIsAlignedToTheSparsePoints) {
                    relative.end());
   EXPECT_LT(relative[relative.size() / 2], 0.01);
 
-  fs::remove(ws.root() / "tool" / (f.name + ".npy"));
+  // A map with width and height swapped is refused, not stretched.
+  const fs::path map = ws.root() / "tool" / (f.name + ".npy");
+  const cv::Mat kept = ReadDepthMap(map);
+  WriteDepthMap(map, kept.t());
+  try {
+    RunDepth(ws, o);
+    FAIL() << "a transposed depth map was stretched";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), map.string()) << e.what();
+    EXPECT_NE(std::string(e.what()).find("aspect ratio"), std::string::npos);
+  }
+  fs::remove(map);
   try {
     RunDepth(ws, o);
     FAIL() << "a frame without a depth map was accepted";
