@@ -77,7 +77,8 @@ FolderLock::FolderLock(const fs::path& file, Mode mode,
     do {
       result = flock(fd_, how | LOCK_NB);
     } while (result != 0 && errno == EINTR);
-    struct stat opened {}, named {};
+    struct stat opened {
+    }, named{};
     if (result != 0 || attempt >= kMaxLockAttempts ||
         (fstat(fd_, &opened) == 0 && stat(file.c_str(), &named) == 0 &&
          opened.st_ino == named.st_ino && opened.st_dev == named.st_dev))
@@ -101,19 +102,18 @@ FolderLock::FolderLock(const fs::path& file, Mode mode,
   }
   char host[256] = {};
   gethostname(host, sizeof(host) - 1);
-  const std::string text = nlohmann::json({{"command", command},
-                                           {"pid", static_cast<int>(getpid())},
-                                           {"host", host},
-                                           {"since", Now()},
-                                           {"mode", mode == Mode::kExclusive
-                                                        ? "exclusive"
-                                                        : "shared"}})
-                               .dump() +
-                           "\n";
+  const std::string text =
+      nlohmann::json(
+          {{"command", command},
+           {"pid", static_cast<int>(getpid())},
+           {"host", host},
+           {"since", Now()},
+           {"mode", mode == Mode::kExclusive ? "exclusive" : "shared"}})
+          .dump() +
+      "\n";
   // The holder's note, for a refusal's message only: a failure to write it
   // leaves the lock held and the note older.
-  if (ftruncate(fd_, 0) == 0)
-    (void)!pwrite(fd_, text.data(), text.size(), 0);
+  if (ftruncate(fd_, 0) == 0) (void)!pwrite(fd_, text.data(), text.size(), 0);
 }
 
 FolderLock::~FolderLock() {

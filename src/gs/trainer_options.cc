@@ -20,23 +20,31 @@ void TrainerOptions::Check() const {
                   "must be zero or positive");
     }
   };
+  const auto weight = [&](double v, const char* name) {
+    non_negative(v, name);
+    if (v > kMaxLossWeight) {
+      throw Error("fit options", name, std::to_string(v),
+                  "must be at most 10000 (the photometric term's weight is "
+                  "1)");
+    }
+  };
   positive(iterations, "iterations");
   if (!(ssim_weight >= 0 && ssim_weight <= 1)) {
     throw Error("fit options", "ssim_weight", std::to_string(ssim_weight),
                 "must be in [0, 1]");
   }
-  non_negative(depth_weight, "depth_weight");
-  non_negative(smoothness_weight, "smoothness_weight");
-  non_negative(anisotropy_weight, "anisotropy_weight");
-  non_negative(normal_weight, "normal_weight");
-  non_negative(hidden_weight, "hidden_weight");
+  weight(depth_weight, "depth_weight");
+  weight(smoothness_weight, "smoothness_weight");
+  weight(anisotropy_weight, "anisotropy_weight");
+  weight(normal_weight, "normal_weight");
+  weight(hidden_weight, "hidden_weight");
   non_negative(hidden_thickness, "hidden_thickness");
-  non_negative(appearance_weight, "appearance_weight");
+  weight(appearance_weight, "appearance_weight");
   positive(normal_tolerance, "normal_tolerance");
-  non_negative(flow_weight, "flow_weight");
+  weight(flow_weight, "flow_weight");
   positive(flow_tolerance, "flow_tolerance");
   positive(flow_huber_pixels, "flow_huber_pixels");
-  non_negative(disparity_weight, "disparity_weight");
+  weight(disparity_weight, "disparity_weight");
   if (!(max_anisotropy >= 1)) {
     throw Error("fit options", "max_anisotropy", std::to_string(max_anisotropy),
                 "must be at least 1");

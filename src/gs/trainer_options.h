@@ -20,6 +20,11 @@ inline constexpr double kEstimatedDepthWeight = 1.0;
 // transform stays the identity; TrainerOptions::appearance).
 inline constexpr std::size_t kAppearanceReferenceView = 0;
 
+// A loss weight above this swamps the photometric term (weight 1) until
+// float gradients overflow and every update is skipped (1e300 trained
+// nothing, and the fit still reported success): a typo, refused by Check.
+inline constexpr double kMaxLossWeight = 1e4;
+
 struct TrainerOptions {
   int iterations = 10000;
   // Losses: (1 - ssim_weight) L1 + ssim_weight D-SSIM on the video; plus

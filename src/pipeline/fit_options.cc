@@ -34,9 +34,12 @@ void FitOptions::Check() const {
     throw Error("--voxel-pixels", "", std::to_string(*voxel_pixels),
                 "must be positive");
   }
-  if (depth_weight && !(*depth_weight >= 0)) {
-    throw Error("--depth-weight", "", std::to_string(*depth_weight),
-                "must be zero or positive");
+  // As TrainerOptions::Check's bound on loss weights, before frames load.
+  if (depth_weight &&
+      !(*depth_weight >= 0 && *depth_weight <= kMaxLossWeight)) {
+    throw Error("--depth-weight", "depth_weight", std::to_string(*depth_weight),
+                "must be from 0 to 10000 (the photometric term's weight is "
+                "1)");
   }
   if (panorama_width < 2) {
     throw Error("--panorama-width", "", std::to_string(panorama_width),

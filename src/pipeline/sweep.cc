@@ -39,13 +39,20 @@ constexpr int kSweepVersion = 2;
 // (--prior-cmd).
 const std::map<std::string, bool>& SweepRunFlags() {
   static const std::map<std::string, bool> kFlags = {
-      {"--dataset", true},          {"--workspace", true},
-      {"--eval", false},            {"--factor", true},
-      {"--iterations", true},       {"--lpips-weights", true},
-      {"--priors", true},           {"--seed", true},
-      {"--deterministic", false},   {"--no-expansion", false},
-      {"--planar-expansion", false}, {"--alpha", true},
-      {"--one-step-expansion", false}, {"--no-gaussian-refinement", false},
+      {"--dataset", true},
+      {"--workspace", true},
+      {"--eval", false},
+      {"--factor", true},
+      {"--iterations", true},
+      {"--lpips-weights", true},
+      {"--priors", true},
+      {"--seed", true},
+      {"--deterministic", false},
+      {"--no-expansion", false},
+      {"--planar-expansion", false},
+      {"--alpha", true},
+      {"--one-step-expansion", false},
+      {"--no-gaussian-refinement", false},
       {"--no-motion", false}};
   return kFlags;
 }
@@ -61,7 +68,8 @@ void CheckSweepEntry(const Json& entry, std::size_t position,
   if (GetJson<int>(entry, "index", source) != static_cast<int>(position)) {
     throw Error(file, at + ".index", entry["index"].dump(),
                 "differs from the entry's position " +
-                    std::to_string(position) + " (entries are numbered 0, 1, "
+                    std::to_string(position) +
+                    " (entries are numbered 0, 1, "
                     "...; plan the sweep again)");
   }
   for (const char* key : {"scene", "suite", "config", "workspace"})
@@ -89,9 +97,9 @@ void CheckSweepEntry(const Json& entry, std::size_t position,
     if (flag == "--workspace") workspace = command[i];
   }
   if (workspace != entry["workspace"].get<std::string>()) {
-    throw Error(file, at + ".command", "--workspace " + workspace,
-                "differs from the entry's workspace " +
-                    entry["workspace"].dump());
+    throw Error(
+        file, at + ".command", "--workspace " + workspace,
+        "differs from the entry's workspace " + entry["workspace"].dump());
   }
 }
 
@@ -482,19 +490,18 @@ SweepTable CollectSweep(const fs::path& sweep) {
     ++planned[key];
     Json s = ReadStatus(sweep, index);
     std::string stale;
-    if (s.is_object() &&
-        (s.value("index", -1) != index ||
-         s.value("command", Json()) != e["command"])) {
+    if (s.is_object() && (s.value("index", -1) != index ||
+                          s.value("command", Json()) != e["command"])) {
       // Written for another plan of this folder: not this entry's result.
       s = Json();
-      stale = "its status is of an earlier plan of this folder; `sweep run` "
-              "runs it again";
+      stale =
+          "its status is of an earlier plan of this folder; `sweep run` "
+          "runs it again";
     }
-    const std::string status =
-        s.is_object() ? s.value("status", "missing")
-                      : (stale.empty() ? "missing" : "stale");
-    const std::string error =
-        s.is_object() ? s.value("error", "") : stale;
+    const std::string status = s.is_object()
+                                   ? s.value("status", "missing")
+                                   : (stale.empty() ? "missing" : "stale");
+    const std::string error = s.is_object() ? s.value("error", "") : stale;
     const MetricRow values = s.is_object() && s.contains("metrics")
                                  ? MetricRowFromJson(s["metrics"])
                                  : MetricRow{};

@@ -42,8 +42,8 @@ void GaussianModelT<T>::Check() const {
   const auto finite = [&](const std::vector<T>& v, const char* name) {
     for (std::size_t i = 0; i < v.size(); ++i) {
       if (!std::isfinite(v[i])) {
-        throw Error("gaussians", std::string(name) + "[" + std::to_string(i) +
-                                     "]",
+        throw Error("gaussians",
+                    std::string(name) + "[" + std::to_string(i) + "]",
                     std::to_string(v[i]), "not finite");
       }
     }

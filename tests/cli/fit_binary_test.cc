@@ -280,16 +280,17 @@ TEST_F(FitBinaryTest, ASecondWriterIsRefusedAndAKilledHoldersLockTakenOver) {
     EXPECT_EQ(RunPano4d(second, log), 1) << second << "\n" << Slurp(log);
     const std::string out = Slurp(log);
     EXPECT_NE(out.find("in use by `pano4d fit --workspace"), std::string::npos)
-        << second << "\n" << out;
-    EXPECT_NE(out.find("PID " + std::to_string(pid)), std::string::npos)
+        << second << "\n"
         << out;
+    EXPECT_NE(out.find("PID " + std::to_string(pid)), std::string::npos) << out;
   }
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status)) << Slurp(ws / "fit1.log");
-  EXPECT_EQ(RunPano4d("fit" + ws_arg + " --force --iterations 20 "
-                      "--no-expansion",
+  EXPECT_EQ(RunPano4d("fit" + ws_arg +
+                          " --force --iterations 20 "
+                          "--no-expansion",
                       ws / "fit2.log"),
             0)
       << Slurp(ws / "fit2.log");
@@ -300,15 +301,14 @@ TEST_F(FitBinaryTest, ASecondWriterIsRefusedAndAKilledHoldersLockTakenOver) {
 TEST_F(FitBinaryTest, TheStopSignalExits75WithTheIterationsDone) {
   const fs::path ws = Workspace("ws_usr1");
   const fs::path ckpt = ws / "pano4d/checkpoints/fit.ckpt";
-  std::vector<std::string> args = {"fit",          ws.string(),
-                                   "--iterations", "100000",
-                                   "--no-expansion", "--checkpoint-every",
-                                   "5"};
+  std::vector<std::string> args = {
+      "fit",    ws.string(),      "--iterations",
+      "100000", "--no-expansion", "--checkpoint-every",
+      "5"};
   args.insert(args.begin() + 1, "--workspace");
   // Signalled once a checkpoint newer than `after` is on disk (the fit
   // is in its loop); returns the exit status and the log.
-  const auto signalled = [&](const fs::path& log,
-                             fs::file_time_type after) {
+  const auto signalled = [&](const fs::path& log, fs::file_time_type after) {
     const pid_t pid = Spawn(args, log);
     EXPECT_GT(pid, 0);
     const auto ready = [&] {
@@ -425,10 +425,9 @@ TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
 TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
   const fs::path ws = Workspace("ws_interrupt");
   const std::vector<std::string> options = {
-      "--iterations",      "40", "--checkpoint-every", "10",
-      "--expand-every",    "20", "--expansion-steps",  "1",
-      "--directions",      "1",  "--expansion-stride", "4",
-      "--panorama-width",  "64", "--prior-cmd",
+      "--iterations", "40", "--checkpoint-every", "10", "--expand-every", "20",
+      "--expansion-steps", "1", "--directions", "1", "--expansion-stride", "4",
+      "--panorama-width", "64", "--prior-cmd",
       // The wait policy pano4d runs with (main.cc), then a hang.
       "echo $OMP_WAIT_POLICY > '" + (ws / "policy.txt").string() +
           "'; sleep 60 # {in} {out}"};
@@ -452,9 +451,9 @@ TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
   while (waitpid(pid, &status, WNOHANG) == 0 &&
          std::chrono::steady_clock::now() - sent < std::chrono::seconds(30))
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  const double seconds = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now() - sent)
-                             .count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - sent)
+          .count();
   std::printf("SIGINT to exit: %.3f s\n", seconds);
   EXPECT_LT(seconds, 1.0) << Slurp(ws / "fit1.log");
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT)
@@ -492,10 +491,10 @@ TEST_F(FitBinaryTest, InterruptDuringThePriorStopsBothAndTheCheckpointResumes) {
 // workspace's own checkpoint still resumes.
 TEST_F(FitBinaryTest, ResumeRefusesAnotherScenesOrACorruptCheckpoint) {
   const fs::path other = dir_->path() / "tiny_other";
-  ASSERT_EQ(RunPano4d("synth --preset tiny --seed 4 --out '" + other.string() +
-                          "'",
-                      dir_->path() / "synth_other.log"),
-            0);
+  ASSERT_EQ(
+      RunPano4d("synth --preset tiny --seed 4 --out '" + other.string() + "'",
+                dir_->path() / "synth_other.log"),
+      0);
   const fs::path ws = Workspace("ws_own");
   const fs::path ws_other = dir_->path() / "ws_other";
   ASSERT_EQ(RunPano4d("depth --workspace '" + ws_other.string() +
@@ -504,9 +503,9 @@ TEST_F(FitBinaryTest, ResumeRefusesAnotherScenesOrACorruptCheckpoint) {
             0);
   const std::string fit = " --iterations 10 --no-expansion";
   for (const fs::path& w : {ws, ws_other}) {
-    ASSERT_EQ(RunPano4d("fit --workspace '" + w.string() + "'" + fit,
-                        w / "fit.log"),
-              0)
+    ASSERT_EQ(
+        RunPano4d("fit --workspace '" + w.string() + "'" + fit, w / "fit.log"),
+        0)
         << Slurp(w / "fit.log");
   }
   const fs::path ckpt = ws / "pano4d/checkpoints/fit.ckpt";
@@ -541,10 +540,10 @@ TEST_F(FitBinaryTest, ResumeRefusesAnotherScenesOrACorruptCheckpoint) {
       std::ofstream out(ckpt, std::ios::binary | std::ios::trunc);
       out << own;
     }
-    EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() + "' --resume" +
-                            fit + flag,
-                        ws / "r.log"),
-              1)
+    EXPECT_EQ(
+        RunPano4d("fit --workspace '" + ws.string() + "' --resume" + fit + flag,
+                  ws / "r.log"),
+        1)
         << flag;
     EXPECT_NE(Slurp(ws / "r.log").find("option " + field), std::string::npos)
         << Slurp(ws / "r.log");

@@ -64,14 +64,14 @@ TEST(Pano4dBinaryTest, FoldersThatAreNotWhatWasAskedForAreNamedAsSuch) {
   testing::TempDir dir;
   std::filesystem::create_directories(dir / "root" / "notascene");
   testing::WriteText(dir / "root" / "notascene" / "readme.txt", "hello");
-  const Result inspect = RunBinary("inspect '" + dir.path().string() + "'", dir);
+  const Result inspect =
+      RunBinary("inspect '" + dir.path().string() + "'", dir);
   EXPECT_EQ(inspect.status, 1);
   EXPECT_NE(inspect.err.find("is a folder"), std::string::npos) << inspect.err;
-  const Result bench =
-      RunBinary("bench datasets --root '" + (dir / "root").string() +
-                    "' --scenes notascene --workspace '" +
-                    (dir / "ws").string() + "'",
-                dir);
+  const Result bench = RunBinary(
+      "bench datasets --root '" + (dir / "root").string() +
+          "' --scenes notascene --workspace '" + (dir / "ws").string() + "'",
+      dir);
   EXPECT_EQ(bench.status, 1);
   EXPECT_NE(bench.err.find("notascene"), std::string::npos) << bench.err;
   EXPECT_NE(bench.err.find("is not a scene in a layout pano4d reads"),
@@ -104,7 +104,8 @@ TEST(Pano4dBinaryTest, OptionsOutsideTheirRangeReadWell) {
   for (const auto& [args, field] :
        std::vector<std::pair<std::string, std::string>>{
            {"fit" + ws + " --dynamic-layers 1000000", "dynamic_layers"},
-           {"fit" + ws + " --directions 100000", "directions"}}) {
+           {"fit" + ws + " --directions 100000", "directions"},
+           {"fit" + ws + " --depth-weight 1e300", "depth_weight"}}) {
     const Result r = RunBinary(args, dir);
     EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
     EXPECT_NE(r.err.find(field), std::string::npos) << r.err;

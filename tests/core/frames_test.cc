@@ -70,14 +70,14 @@ TEST(FramesTest, AFramesFileThatNamesPathsOrCorruptPosesIsRefused) {
     Json value;
     std::string field;
   };
-  for (const Case& c : std::vector<Case>{
-           {"val", "name", "/tmp/x/absval", "name"},
-           {"val", "name", "../../../x", "name"},
-           {"train", "name", "..", "name"},
-           {"train", "name", "", "name"},
-           {"train", "name", long_name, "name"},
-           {"train", "qvec", Json({0, 0, 0, 0}), "qvec"},
-           {"train", "tvec", Json({1e300, 0, 0}), "tvec"}}) {
+  for (const Case& c :
+       std::vector<Case>{{"val", "name", "/tmp/x/absval", "name"},
+                         {"val", "name", "../../../x", "name"},
+                         {"train", "name", "..", "name"},
+                         {"train", "name", "", "name"},
+                         {"train", "name", long_name, "name"},
+                         {"train", "qvec", Json({0, 0, 0, 0}), "qvec"},
+                         {"train", "tvec", Json({1e300, 0, 0}), "tvec"}}) {
     Json bad = good;
     bad[c.split][0][c.key] = c.value;
     WriteJson(file, bad);

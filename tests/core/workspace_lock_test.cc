@@ -32,7 +32,8 @@ TEST(FolderLockTest, WritersExcludeEveryoneReadersShare) {
   testing::TempDir dir;
   const fs::path file = dir / "ws" / "pano4d" / "lock";
   {
-    const FolderLock writer(file, Mode::kExclusive, "pano4d fit --workspace ws");
+    const FolderLock writer(file, Mode::kExclusive,
+                            "pano4d fit --workspace ws");
     const std::string refused = Refusal(file, Mode::kExclusive);
     EXPECT_NE(refused.find("pano4d fit --workspace ws"), std::string::npos)
         << refused;

@@ -27,7 +27,8 @@ std::filesystem::path Workspace() {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
                                       std::size_t size) {
-  const std::filesystem::path file = pano4d::Workspace(Workspace()).frames_json();
+  const std::filesystem::path file =
+      pano4d::Workspace(Workspace()).frames_json();
   std::filesystem::create_directories(file.parent_path());
   std::ofstream(file, std::ios::binary | std::ios::trunc)
       .write(reinterpret_cast<const char*>(data), size);

@@ -49,9 +49,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
   const std::string_view binary(
       reinterpret_cast<const char*>(data + 4 + length), size - 4 - length);
   try {
-    const pano4d::GaussianScene scene = pano4d::DecodeScene4d(
-        pano4d::ParseJson(header, "fuzz/scene4d.json"), binary,
-        "fuzz/scene4d.json", nullptr);
+    const pano4d::GaussianScene scene =
+        pano4d::DecodeScene4d(pano4d::ParseJson(header, "fuzz/scene4d.json"),
+                              binary, "fuzz/scene4d.json", nullptr);
     scene.Check();  // what decodes must hold together
   } catch (const pano4d::Error&) {
   }

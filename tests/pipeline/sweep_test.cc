@@ -124,34 +124,30 @@ TEST_F(SweepTest, ManifestsAreCheckedAgainstTheirSchema) {
     std::function<void(Json*)> edit;
   };
   const std::vector<Case> cases = {
-      {"no config", "entries[0]", [](Json* m) {
-         (*m)["entries"][0].erase("config");
-       }},
-      {"no scene", "entries[0]", [](Json* m) {
-         (*m)["entries"][0].erase("scene");
-       }},
-      {"no seed", "entries[0]", [](Json* m) {
-         (*m)["entries"][0].erase("seed");
-       }},
-      {"a program", "entries[0].command", [&](Json* m) {
+      {"no config", "entries[0]",
+       [](Json* m) { (*m)["entries"][0].erase("config"); }},
+      {"no scene", "entries[0]",
+       [](Json* m) { (*m)["entries"][0].erase("scene"); }},
+      {"no seed", "entries[0]",
+       [](Json* m) { (*m)["entries"][0].erase("seed"); }},
+      {"a program", "entries[0].command",
+       [&](Json* m) {
          (*m)["entries"][0]["command"] = {"/bin/sh", "-c",
                                           "touch '" + marker.string() + "'"};
        }},
-      {"a flag that runs a program", "--prior-cmd", [&](Json* m) {
+      {"a flag that runs a program", "--prior-cmd",
+       [&](Json* m) {
          auto& c = (*m)["entries"][0]["command"];
          c.push_back("--prior-cmd");
          c.push_back("touch '" + marker.string() + "'");
        }},
-      {"another workspace", "--workspace", [](Json* m) {
-         (*m)["entries"][0]["workspace"] = "/tmp/elsewhere";
-       }},
-      {"a duplicated index", "entries[1].index", [](Json* m) {
-         (*m)["entries"][1]["index"] = 0;
-       }},
+      {"another workspace", "--workspace",
+       [](Json* m) { (*m)["entries"][0]["workspace"] = "/tmp/elsewhere"; }},
+      {"a duplicated index", "entries[1].index",
+       [](Json* m) { (*m)["entries"][1]["index"] = 0; }},
       {"version 1", "version", [](Json* m) { (*m)["version"] = 1; }},
-      {"no entries", "no entries", [](Json* m) {
-         (*m)["entries"] = Json::array();
-       }},
+      {"no entries", "no entries",
+       [](Json* m) { (*m)["entries"] = Json::array(); }},
   };
   for (const Case& c : cases) {
     Json m = planned;
@@ -215,11 +211,14 @@ TEST_F(SweepTest, SweepLocalPassesSignalsOnAndWaits) {
     // Signalled once entry 0's `pano4d run` holds its workspace and fits.
     const std::string script =
         "(" + kPano4d + " sweep local '" + sweep.string() +
-        "' --jobs 1 & pid=$!; n=0; until grep -q '\"pid\"' '" +
-        lock.string() + "' 2>/dev/null || [ $n -gt 600 ]; do sleep 0.1; "
-        "n=$((n+1)); done; sleep 2; kill -" + signal +
+        "' --jobs 1 & pid=$!; n=0; until grep -q '\"pid\"' '" + lock.string() +
+        "' 2>/dev/null || [ $n -gt 600 ]; do sleep 0.1; "
+        "n=$((n+1)); done; sleep 2; kill -" +
+        signal +
         " $pid; wait $pid; echo \"local exit $?\"; rp=$(grep -o "
-        "'\"pid\":[0-9]*' '" + lock.string() + "' | cut -d: -f2); "
+        "'\"pid\":[0-9]*' '" +
+        lock.string() +
+        "' | cut -d: -f2); "
         "if kill -0 $rp 2>/dev/null; then echo 'run alive'; else echo "
         "'run gone'; fi)";
     RunLogged(script, log);
@@ -245,11 +244,10 @@ TEST_F(SweepTest, AStatusOfTheWrongTypesIsNamedAndIgnored) {
             0)
       << Slurp(log);
   const Json entry = ReadJson(sweep / "manifest.json")["entries"][0];
-  WriteJson(sweep / "status" / "0.json",
-            {{"index", 0},
-             {"command", entry["command"]},
-             {"status", "done"},
-             {"seconds", "abc"}});
+  WriteJson(sweep / "status" / "0.json", {{"index", 0},
+                                          {"command", entry["command"]},
+                                          {"status", "done"},
+                                          {"seconds", "abc"}});
   ASSERT_EQ(RunPano4d("sweep collect '" + sweep.string() + "'", log), 0)
       << Slurp(log);
   EXPECT_NE(Slurp(log).find("0.json: field 'seconds'"), std::string::npos)
@@ -357,7 +355,8 @@ TEST_F(SweepTest, TheStopSignalCheckpointsAndTheRerunResumes) {
 // with them; one without runs without.
 TEST_F(SweepTest, PriorsReachTheEntriesThatHaveThem) {
   const fs::path priors = dir_->path() / "priors";
-  NpyArray disparity = NpyArray::FromFloats({48, 64}, std::vector<float>(48 * 64, 1.0f));
+  NpyArray disparity =
+      NpyArray::FromFloats({48, 64}, std::vector<float>(48 * 64, 1.0f));
   WriteNpy(priors / "tiny" / "disp" / "0_00000.npy", disparity);
   const fs::path sweep = dir_->path() / "sweep_priors";
   const fs::path log = dir_->path() / "sweep_priors.log";
@@ -367,23 +366,24 @@ TEST_F(SweepTest, PriorsReachTheEntriesThatHaveThem) {
                       log),
             0)
       << Slurp(log);
-  const auto command = ReadJson(sweep / "manifest.json")["entries"][0]["command"]
-                           .get<std::vector<std::string>>();
+  const auto command =
+      ReadJson(sweep / "manifest.json")["entries"][0]["command"]
+          .get<std::vector<std::string>>();
   const auto at = std::find(command.begin(), command.end(), "--priors");
   ASSERT_NE(at, command.end());
   EXPECT_EQ(fs::path(*(at + 1)), fs::absolute(priors / "tiny"));
   // A root without this scene's folder: no --priors, and the log says why.
   fs::create_directories(dir_->path() / "empty_priors");
-  ASSERT_EQ(RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
-                          "' --priors '" +
-                          (dir_->path() / "empty_priors").string() +
-                          "' --out '" + sweep.string() + "2'",
-                      log),
-            0)
+  ASSERT_EQ(
+      RunPano4d("sweep plan --root '" + (dir_->path() / "root").string() +
+                    "' --priors '" + (dir_->path() / "empty_priors").string() +
+                    "' --out '" + sweep.string() + "2'",
+                log),
+      0)
       << Slurp(log);
-  const auto without =
-      ReadJson(fs::path(sweep.string() + "2") / "manifest.json")["entries"][0]
-          ["command"].get<std::vector<std::string>>();
+  const auto without = ReadJson(fs::path(sweep.string() + "2") /
+                                "manifest.json")["entries"][0]["command"]
+                           .get<std::vector<std::string>>();
   EXPECT_EQ(std::find(without.begin(), without.end(), "--priors"),
             without.end());
   EXPECT_NE(Slurp(log).find("without learned priors"), std::string::npos)
