@@ -12,7 +12,7 @@ void GaussianScene::Check() const {
   for (const auto& [model, name] :
        {std::pair{&statics, "statics."}, std::pair{&dynamics, "dynamics."}}) {
     try {
-      model->Check();
+      model->CheckValues();
     } catch (const Error& e) {
       throw Error("scene", name + e.field(), e.value(), e.problem());
     }

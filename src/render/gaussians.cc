@@ -36,6 +36,12 @@ void GaussianModelT<T>::Check() const {
   expect(quats, 4, "quats");
   expect(sh, static_cast<std::size_t>(sh_coefficients()) * 3, "sh");
   expect(opacities, 1, "opacities");
+}
+
+template <typename T>
+void GaussianModelT<T>::CheckValues() const {
+  Check();
+  const std::size_t n = size();
   // Every value finite, every rotation a quaternion that is not zero (it
   // has no direction to normalise to): a file that breaks either is
   // corrupt, and would reach a PLY or a render as NaN.

@@ -30,8 +30,12 @@ struct GaussianModelT {
   int sh_coefficients() const { return (sh_degree + 1) * (sh_degree + 1); }
   void Resize(std::size_t n);
   // Throws pano4d::Error when the arrays disagree in size or the degree is
-  // outside 0..3.
+  // outside 0..3. (The rasterizer takes any values: a zero quaternion or a
+  // NaN of a diverging step renders as nothing, and the trainer counts it.)
   void Check() const;
+  // Check, and every value finite, every quaternion non-zero: what a scene
+  // read from or written to a file must hold (GaussianScene::Check).
+  void CheckValues() const;
 };
 
 // A pinhole camera as the rasterizer uses it (distortion is removed
