@@ -275,6 +275,8 @@ TEST_F(FitBinaryTest, ASecondWriterIsRefusedAndAKilledHoldersLockTakenOver) {
         "fit" + ws_arg + " --iterations 20",
         "depth" + ws_arg + " --dataset '" + (dir_->path() / "tiny").string() +
             "'",
+        "run" + ws_arg + " --dataset '" + (dir_->path() / "tiny").string() +
+            "' --iterations 20",
         "render" + ws_arg + " --out '" + (ws / "r").string() + "'"}) {
     const fs::path log = ws / "second.log";
     EXPECT_EQ(RunPano4d(second, log), 1) << second << "\n" << Slurp(log);
