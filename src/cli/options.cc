@@ -1,8 +1,10 @@
 #include "src/cli/options.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <optional>
 
 #include <CLI/CLI.hpp>
@@ -229,21 +231,34 @@ void AddNoExpansionFlag(CLI::App* app, bool* expand) {
 
 namespace {
 
-// Unsigned parsing accepts "-1" and wraps it; a seed must not.
-const CLI::Validator kNonNegativeSeed(
-    [](std::string& value) -> std::string {
-      const auto first = value.find_first_not_of(" \t");
-      if (first != std::string::npos && value[first] == '-')
-        return "a seed is a non-negative integer, not " + value;
-      return "";
-    },
-    "NONNEGATIVE");
+// Unsigned parsing accepts "-1" and wraps it, and saturates a value past
+// the type's largest; a seed must be exactly the number given.
+template <typename Seed>
+CLI::Validator SeedCheck() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        const auto first = value.find_first_not_of(" \t");
+        const std::string bad = "a seed is an integer from 0 to " +
+                                std::to_string(std::numeric_limits<Seed>::max()) +
+                                ", not " + value;
+        if (first == std::string::npos || value[first] == '-') return bad;
+        errno = 0;
+        char* end = nullptr;
+        const unsigned long long v =
+            std::strtoull(value.c_str() + first, &end, 10);
+        if (errno == ERANGE || *end != '\0' ||
+            v > std::numeric_limits<Seed>::max())
+          return bad;
+        return "";
+      },
+      "SEED");
+}
 
 template <typename Seed>
 CLI::Option* AddUnsignedSeed(CLI::App* app, Seed* seed,
                              const std::string& help) {
   return app->add_option("--seed", *seed, help)
-      ->check(kNonNegativeSeed)
+      ->check(SeedCheck<Seed>())
       ->capture_default_str();
 }
 

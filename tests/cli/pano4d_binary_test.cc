@@ -94,6 +94,9 @@ TEST(Pano4dBinaryTest, OptionsOutsideTheirRangeReadWell) {
       {"fit" + ws + " --flow-weight abc", "must be a number >= 0, not abc"},
       {"fit" + ws + " --hidden-thickness inf", "must be a finite number"},
       {"fit" + ws + " --resume --force", "excludes"},
+      {"fit" + ws + " --seed 18446744073709551616",
+       "a seed is an integer from 0 to 18446744073709551615"},
+      {"fit" + ws + " --seed -1", "a seed is an integer"},
   };
   for (const auto& [args, message] : usage) {
     const Result r = RunBinary(args, dir);
