@@ -444,9 +444,13 @@ StepReport Trainer::Step() {
   if (options_.anisotropy_weight > 0 && scene_.size() > 0) {
     const double norm = options_.anisotropy_weight / scene_.size();
     const double bound = options_.max_anisotropy;
-    for (auto [log_scales, grads] :
+    for (const auto& pair :
          {std::pair{&scene_.statics.log_scales, &static_grads_.log_scales},
           {&scene_.dynamics.log_scales, &dynamic_grads_.log_scales}}) {
+      // Named, not bound: clang before 16 cannot capture a structured
+      // binding in the lambda (the fuzz build uses clang 14).
+      const std::vector<float>* log_scales = pair.first;
+      std::vector<float>* grads = pair.second;
       report.anisotropy += BlockSum(log_scales->size() / 3, [&](std::size_t i) {
         const float* s = &(*log_scales)[i * 3];
         const int hi = static_cast<int>(std::max_element(s, s + 3) - s);
