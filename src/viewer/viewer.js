@@ -49,17 +49,32 @@ function arrayOf(buffer, a, name) {
   const bytes = a.dtype === "float32" ? 4 : 2;
   if (a.offset + n * bytes > buffer.byteLength)
     throw new Error(`scene4d.json: ${name} lies outside scene4d.bin`);
-  if (a.dtype === "float32") return new Float32Array(buffer, a.offset, n);
-  const bits = new Uint16Array(buffer, a.offset, n);
-  const out = new Float32Array(n);
-  for (let i = 0; i < n; ++i) out[i] = kHalf[bits[i]];
+  let out;
+  if (a.dtype === "float32") {
+    out = new Float32Array(buffer, a.offset, n);
+  } else {
+    const bits = new Uint16Array(buffer, a.offset, n);
+    out = new Float32Array(n);
+    for (let i = 0; i < n; ++i) out[i] = kHalf[bits[i]];
+  }
+  // A NaN would be drawn as a splat at no place: refuse the file instead.
+  for (let i = 0; i < n; ++i)
+    if (!Number.isFinite(out[i]))
+      throw new Error(`scene4d.bin: ${name}[${i}] is not finite`);
   return out;
 }
 
 function gaussianSet(buffer, header, set) {
   const s = header[set], arrays = {};
-  for (const [name, a] of Object.entries(s.arrays))
+  if (!Number.isInteger(s.count) || s.count < 0)
+    throw new Error(`scene4d.json: ${set}.count ${s.count} is not a count`);
+  for (const [name, a] of Object.entries(s.arrays)) {
     arrays[name] = arrayOf(buffer, a, `${set}.${name}`);
+    // Every array holds one row per Gaussian: a larger count would read
+    // past its end.
+    if (a.shape[0] !== s.count)
+      throw new Error(`scene4d.json: ${set}.${name} has ${a.shape[0]} rows, ${set}.count says ${s.count}`);
+  }
   return { count: s.count, coefficients: (header.sh_degree + 1) ** 2, ...arrays };
 }
 
