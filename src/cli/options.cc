@@ -56,14 +56,13 @@ CLI::Validator InRange(double lo, double hi) {
 }
 
 void RefuseNonFiniteNumbers(CLI::App* app) {
-  const CLI::Validator finite = NumberCheck(
-      [](double) { return true; }, "a finite number", "");
+  const CLI::Validator finite =
+      NumberCheck([](double) { return true; }, "a finite number", "");
   for (CLI::Option* o : app->get_options()) {
     if (o->get_type_name().rfind("FLOAT", 0) == 0) o->check(finite);
   }
   for (CLI::App* sub : app->get_subcommands({})) RefuseNonFiniteNumbers(sub);
 }
-
 
 void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
   app->add_option("--max-gaussians", o->max_gaussians,
@@ -238,9 +237,9 @@ CLI::Validator SeedCheck() {
   return CLI::Validator(
       [](std::string& value) -> std::string {
         const auto first = value.find_first_not_of(" \t");
-        const std::string bad = "a seed is an integer from 0 to " +
-                                std::to_string(std::numeric_limits<Seed>::max()) +
-                                ", not " + value;
+        const std::string bad =
+            "a seed is a non-negative integer up to " +
+            std::to_string(std::numeric_limits<Seed>::max()) + ", not " + value;
         if (first == std::string::npos || value[first] == '-') return bad;
         errno = 0;
         char* end = nullptr;

@@ -84,10 +84,13 @@ TEST(CliTest, ANegativeSeedIsAUsageErrorNotAWrappedOne) {
         << args[0] << ": " << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists("never_written"));
-  // A non-negative seed passes the check (the command then fails on the
-  // source folder, which is no workspace: not a usage error).
+  // A non-negative seed passes the check (the command then fails on an
+  // empty folder, which is no workspace: not a usage error). Not the
+  // source folder: a command that runs takes its workspace's lock there.
+  testing::TempDir empty;
   EXPECT_EQ(
-      RunCli({"fit", "--workspace", PANO4D_SOURCE_DIR, "--seed", "7"}).status,
+      RunCli({"fit", "--workspace", empty.path().string(), "--seed", "7"})
+          .status,
       kExitError);
 }
 

@@ -95,8 +95,8 @@ TEST(Pano4dBinaryTest, OptionsOutsideTheirRangeReadWell) {
       {"fit" + ws + " --hidden-thickness inf", "must be a finite number"},
       {"fit" + ws + " --resume --force", "excludes"},
       {"fit" + ws + " --seed 18446744073709551616",
-       "a seed is an integer from 0 to 18446744073709551615"},
-      {"fit" + ws + " --seed -1", "a seed is an integer"},
+       "a seed is a non-negative integer up to 18446744073709551615"},
+      {"fit" + ws + " --seed -1", "a seed is a non-negative integer"},
   };
   for (const auto& [args, message] : usage) {
     const Result r = RunBinary(args, dir);
