@@ -90,8 +90,8 @@ int Main(int argc, char** argv) {
     const int cores = omp_get_num_procs();
     if (threads > cores) {
       PANO4D_LOG(kWarning)
-          << "--threads " << threads << " is more than this machine's "
-          << cores << " cores: every parallel loop then waits for threads "
+          << "--threads " << threads << " is more than this machine's " << cores
+          << " cores: every parallel loop then waits for threads "
           << "that share a core, which is slower, not faster; use at most "
           << cores;
     }

@@ -107,10 +107,11 @@ void AddBenchDatasets(CLI::App* bench, Action* action) {
                   "Fit iterations per scene (default: run's schedule)")
       ->check(Positive());
   AddLpipsWeightsOption(sub, &o->lpips_weights);
-  sub->add_option("--priors", o->priors,
-                  "A root of learned priors per scene: ROOT/<scene>/ in any layout "
-                  "--priors reads (the data root itself when each scene "
-                  "folder holds its own); scenes without are run without")
+  sub->add_option(
+         "--priors", o->priors,
+         "A root of learned priors per scene: ROOT/<scene>/ in any layout "
+         "--priors reads (the data root itself when each scene "
+         "folder holds its own); scenes without are run without")
       ->check(CLI::ExistingDirectory);
   sub->add_option("--workspace", o->workspace,
                   "Where the scenes' workspaces go (WS/<scene>) and the "

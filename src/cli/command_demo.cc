@@ -11,9 +11,9 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/core/timer.h"
+#include "src/core/workspace_lock.h"
 #include "src/datasets/synth_generate.h"
 #include "src/pipeline/run.h"
-#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace {

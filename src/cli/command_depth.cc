@@ -8,8 +8,8 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/core/file.h"
-#include "src/pipeline/depth.h"
 #include "src/core/workspace_lock.h"
+#include "src/pipeline/depth.h"
 
 namespace pano4d::cli {
 

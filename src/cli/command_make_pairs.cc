@@ -11,9 +11,9 @@
 #include "src/cli/options.h"
 #include "src/core/frames.h"
 #include "src/core/json.h"
+#include "src/core/workspace_lock.h"
 #include "src/gs/trainer.h"
 #include "src/pano/pairs.h"
-#include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
@@ -64,14 +64,13 @@ void AddMakePairsCommand(CLI::App& app, Action* action) {
       "Writes OUT/clip_<k>/cov/, mask/ (255 = lost in the round trip, to "
       "generate), src/ and meta.json (directions, angles, cameras), and "
       "OUT/pairs.json.");
-  sub->callback(
-      [action, o] {
-        *action = [o] {
-          const FolderLock lock =
-              LockWorkspace(o->workspace, FolderLock::Mode::kShared);
-          return RunMakePairsCommand(*o);
-        };
-      });
+  sub->callback([action, o] {
+    *action = [o] {
+      const FolderLock lock =
+          LockWorkspace(o->workspace, FolderLock::Mode::kShared);
+      return RunMakePairsCommand(*o);
+    };
+  });
 }
 
 }  // namespace pano4d::cli

@@ -8,8 +8,8 @@
 
 #include "src/cli/app.h"
 #include "src/cli/options.h"
-#include "src/pipeline/render.h"
 #include "src/core/workspace_lock.h"
+#include "src/pipeline/render.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;

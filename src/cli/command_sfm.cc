@@ -7,8 +7,8 @@
 
 #include "src/cli/app.h"
 #include "src/cli/options.h"
-#include "src/pipeline/sfm.h"
 #include "src/core/workspace_lock.h"
+#include "src/pipeline/sfm.h"
 
 namespace pano4d::cli {
 

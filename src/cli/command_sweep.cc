@@ -42,10 +42,11 @@ void AddSweepCommand(CLI::App& app, Action* action) {
   p->add_flag("--deterministic", plan->deterministic,
               "Results that do not depend on threads or machine");
   p->add_option("--lpips-weights", plan->lpips_weights, "For LPIPS");
-  p->add_option("--priors", plan->priors,
-                "A root of learned priors per scene: ROOT/<scene>/ in any layout "
-                "--priors reads (the data root itself when each scene "
-                "folder holds its own); scenes without are run without")
+  p->add_option(
+       "--priors", plan->priors,
+       "A root of learned priors per scene: ROOT/<scene>/ in any layout "
+       "--priors reads (the data root itself when each scene "
+       "folder holds its own); scenes without are run without")
       ->check(CLI::ExistingDirectory);
   p->add_option("--out", plan->out, "The sweep folder (SWEEP)")->required();
   p->callback([action, plan] {

@@ -57,6 +57,27 @@ void Remember(int signal) {
   if (g_received == 0) g_received = signal;
 }
 
+// `handler` for each of `signals` except those pano4d ignores (`nohup`, a
+// background job's SIGINT), which stay ignored; the previous actions go
+// to `old`, for RestoreHandlers.
+template <std::size_t N>
+void InstallUnlessIgnored(const int (&signals)[N], void (*handler)(int),
+                          struct sigaction (&old)[N]) {
+  struct sigaction action {};
+  action.sa_handler = handler;
+  sigemptyset(&action.sa_mask);
+  for (std::size_t i = 0; i < N; ++i) {
+    sigaction(signals[i], nullptr, &old[i]);
+    if (old[i].sa_handler != SIG_IGN) sigaction(signals[i], &action, nullptr);
+  }
+}
+
+template <std::size_t N>
+void RestoreHandlers(const int (&signals)[N],
+                     const struct sigaction (&old)[N]) {
+  for (std::size_t i = 0; i < N; ++i) sigaction(signals[i], &old[i], nullptr);
+}
+
 // What ends pano4d from outside: Ctrl-C, kill, a closed terminal, Ctrl-\.
 // A child in its own group hears none of them by itself.
 constexpr int kPassedSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
@@ -69,19 +90,9 @@ class SignalsRemembered {
  public:
   SignalsRemembered() {
     g_received = 0;
-    struct sigaction action {};
-    action.sa_handler = Remember;
-    sigemptyset(&action.sa_mask);
-    for (int i = 0; i < kSignalCount; ++i) {
-      sigaction(kPassedSignals[i], nullptr, &old_[i]);
-      if (old_[i].sa_handler != SIG_IGN)
-        sigaction(kPassedSignals[i], &action, nullptr);
-    }
+    InstallUnlessIgnored(kPassedSignals, Remember, old_);
   }
-  ~SignalsRemembered() {
-    for (int i = 0; i < kSignalCount; ++i)
-      sigaction(kPassedSignals[i], &old_[i], nullptr);
-  }
+  ~SignalsRemembered() { RestoreHandlers(kPassedSignals, old_); }
 
  private:
   struct sigaction old_[kSignalCount] {};
@@ -135,7 +146,6 @@ int StopGroup(pid_t pid, rusage* usage, const std::string& what) {
 // The signal a SignalsForwarded scope received, or 0.
 volatile std::sig_atomic_t g_forward = 0;
 constexpr int kForwardedSignals[] = {SIGINT, SIGTERM, SIGHUP};
-constexpr int kForwardedCount = sizeof(kForwardedSignals) / sizeof(int);
 
 void RememberForForwarding(int signal) {
   if (g_forward == 0) g_forward = signal;
@@ -168,21 +178,12 @@ int WaitForwarding(pid_t pid, rusage* usage, const std::string& what) {
 }  // namespace
 
 SignalsForwarded::SignalsForwarded() {
-  static_assert(kForwardedCount == sizeof(old_) / sizeof(old_[0]));
   g_forward = 0;
-  struct sigaction action {};
-  action.sa_handler = RememberForForwarding;
-  sigemptyset(&action.sa_mask);
-  for (int i = 0; i < kForwardedCount; ++i) {
-    sigaction(kForwardedSignals[i], nullptr, &old_[i]);
-    if (old_[i].sa_handler != SIG_IGN)
-      sigaction(kForwardedSignals[i], &action, nullptr);
-  }
+  InstallUnlessIgnored(kForwardedSignals, RememberForForwarding, old_);
 }
 
 SignalsForwarded::~SignalsForwarded() {
-  for (int i = 0; i < kForwardedCount; ++i)
-    sigaction(kForwardedSignals[i], &old_[i], nullptr);
+  RestoreHandlers(kForwardedSignals, old_);
   const int received = g_forward;
   g_forward = 0;
   if (received != 0) std::raise(received);

@@ -70,7 +70,7 @@ class SignalsForwarded {
   static int Received();
 
  private:
-  struct sigaction old_[3] {};  // SIGINT, SIGTERM, SIGHUP's actions before
+  struct sigaction old_[3]{};  // SIGINT, SIGTERM, SIGHUP's actions before
 };
 
 // Runs argv[0] (a path) with argv[1..], stdin from /dev/null, stdout and

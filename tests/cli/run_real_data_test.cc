@@ -58,9 +58,12 @@ TEST(RunRealDataTest, NvidiaBalloon1WithoutDepthReachesTheFloor) {
   EXPECT_EQ(plan["facts"]["depth_source"], "stereo");
   EXPECT_TRUE(plan["facts"]["targets_are_training_cameras"].get<bool>());
   for (const auto& s : plan["stages"]) {
-    if (s["stage"] == "expansion") EXPECT_FALSE(s["run"].get<bool>());
-    if (s["stage"] == "sfm" || s["stage"] == "eval")
+    if (s["stage"] == "expansion") {
+      EXPECT_FALSE(s["run"].get<bool>());
+    }
+    if (s["stage"] == "sfm" || s["stage"] == "eval") {
       EXPECT_TRUE(s["run"].get<bool>()) << s.dump();
+    }
   }
   // Every stage at the evaluation resolution.
   const cv::Mat image = cv::imread((ws / "images" / "00000.png").string());
