@@ -66,7 +66,7 @@ int Main(int argc, char** argv) {
   AddExportCommand(app, &action);
   AddViewCommand(app, &action);
   AddSweepCommand(app, &action);
-  RefuseNonFiniteNumbers(&app);
+  RefuseNonFiniteAndEmptyValues(&app);
 
   SetThisCommandLine(argc, argv);  // a workspace lock names its holder
   try {

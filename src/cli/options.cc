@@ -55,13 +55,21 @@ CLI::Validator InRange(double lo, double hi) {
                      "[" + BoundText(lo) + ", " + BoundText(hi) + "]");
 }
 
-void RefuseNonFiniteNumbers(CLI::App* app) {
+void RefuseNonFiniteAndEmptyValues(CLI::App* app) {
   const CLI::Validator finite =
       NumberCheck([](double) { return true; }, "a finite number", "");
+  const CLI::Validator not_empty(
+      [](const std::string& text) -> std::string {
+        return text.empty() ? "must not be empty" : "";
+      },
+      "", "");
   for (CLI::Option* o : app->get_options()) {
+    if (o->get_expected_max() == 0) continue;  // a flag
     if (o->get_type_name().rfind("FLOAT", 0) == 0) o->check(finite);
+    if (o->get_type_name().rfind("TEXT", 0) == 0) o->check(not_empty);
   }
-  for (CLI::App* sub : app->get_subcommands({})) RefuseNonFiniteNumbers(sub);
+  for (CLI::App* sub : app->get_subcommands({}))
+    RefuseNonFiniteAndEmptyValues(sub);
 }
 
 void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {

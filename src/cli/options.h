@@ -29,9 +29,11 @@ namespace pano4d::cli {
 CLI::Validator NonNegative();
 CLI::Validator Positive();
 CLI::Validator InRange(double lo, double hi);
-// Adds a check refusing NaN and Inf to every floating-point option of
-// `app` and its subcommands (Main does, once, after they are built).
-void RefuseNonFiniteNumbers(CLI::App* app);
+// Adds checks refusing NaN and Inf to every floating-point option of `app`
+// and its subcommands, and an empty value to every text or path option (an
+// empty path would otherwise reach the file system and be reported without
+// a name). Main calls it once, after the commands are built.
+void RefuseNonFiniteAndEmptyValues(CLI::App* app);
 
 // --seed into an unsigned seed. A negative value is a usage error
 // (unsigned parsing would wrap -1 to 18446744073709551615).

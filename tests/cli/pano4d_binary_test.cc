@@ -97,6 +97,8 @@ TEST(Pano4dBinaryTest, OptionsOutsideTheirRangeReadWell) {
       {"fit" + ws + " --seed 18446744073709551616",
        "a seed is a non-negative integer up to 18446744073709551615"},
       {"fit" + ws + " --seed -1", "a seed is a non-negative integer"},
+      {"synth --out ''", "--out: must not be empty"},
+      {"render" + ws + " --out ''", "--out: must not be empty"},
   };
   for (const auto& [args, message] : usage) {
     const Result r = RunBinary(args, dir);

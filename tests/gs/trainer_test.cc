@@ -9,6 +9,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "src/core/error.h"
 #include "src/core/file.h"
@@ -413,6 +414,37 @@ TEST(TrainerTest, CheckpointOfAnotherSceneCorruptOrEditedIsRefusedByName) {
   EXPECT_NE(
       load(views, edited("\"scene\":\"", "\"scene\":\"0")).find("'scene'"),
       std::string::npos);
+}
+
+// A version-1 checkpoint (no checksum) is still read for its scene, and its
+// Gaussians are checked like any other scene's: a zero quaternion is refused
+// naming the file instead of reaching an exported PLY.
+TEST(TrainerTest, AVersionOneCheckpointWithAZeroQuaternionIsRefused) {
+  const GaussianScene teacher = StaticTeacher();
+  const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
+  Trainer a(teacher, views, FastOptions(10), /*seed=*/0);
+  a.Step();
+  testing::TempDir dir;
+  a.SaveCheckpoint(dir / "a.ckpt");
+  std::vector<std::uint8_t> v1 = ReadFileBytes(dir / "a.ckpt");
+  v1.resize(v1.size() - 8);  // version 1 has no checksum
+  v1[7] = '1';
+  EXPECT_EQ(ErrorOf([&] { ReadCheckpointScene(v1, "v1.ckpt"); }), "");
+
+  std::uint64_t length = 0;
+  std::memcpy(&length, v1.data() + 8, 8);
+  const nlohmann::json header = nlohmann::json::parse(
+      std::string(v1.begin() + 16, v1.begin() + 16 + length));
+  std::size_t offset = 16 + length;
+  for (const nlohmann::json& array : header.at("arrays")) {
+    if (array.at("name") == "static.quats") break;
+    offset += array.at("count").get<std::size_t>() * sizeof(float);
+  }
+  std::fill(v1.begin() + offset, v1.begin() + offset + 4 * sizeof(float), 0);
+  const std::string error =
+      ErrorOf([&] { ReadCheckpointScene(v1, "v1.ckpt"); });
+  EXPECT_NE(error.find("v1.ckpt"), std::string::npos) << error;
+  EXPECT_NE(error.find("quat"), std::string::npos) << error;
 }
 
 TEST(TrainerTest, DensificationRespectsTheCap) {
