@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <system_error>
 
@@ -122,6 +123,39 @@ fs::path TemporaryPathFor(const fs::path& path) {
   return tmp;
 }
 
+namespace {
+
+// The room left on the file system holding `path` or its nearest existing
+// parent (a file about to be written may not exist yet), if it can be told.
+std::optional<std::uintmax_t> AvailableBytes(const fs::path& path) {
+  std::error_code ec;
+  fs::path existing = path;
+  while (!existing.empty() && !fs::exists(existing, ec))
+    existing = existing.parent_path();
+  const fs::space_info space = fs::space(existing.empty() ? "." : existing, ec);
+  if (ec) return std::nullopt;
+  return space.available;
+}
+
+}  // namespace
+
+bool DiskIsFull(const fs::path& path) {
+  const std::optional<std::uintmax_t> available = AvailableBytes(path);
+  return available && *available < kFullDiskBytes;
+}
+
+Error WriteFailure(const fs::path& path, const std::string& why) {
+  const std::optional<std::uintmax_t> available = AvailableBytes(path);
+  if (!available || *available >= kFullDiskBytes)
+    return Error::In(path.string(), "could not be written: " + why);
+  return Error::In(path.string(),
+                   "could not be written: the disk holding it is full (" +
+                       std::to_string(*available / 1024) +
+                       " KiB free; the system said: " + why +
+                       "); free some space and run the same command again "
+                       "(what it wrote before is intact)");
+}
+
 void WriteAtomically(const fs::path& path,
                      const std::function<void(const fs::path&)>& write) {
   if (path.has_parent_path()) EnsureDirectory(path.parent_path());
@@ -134,6 +168,10 @@ void WriteAtomically(const fs::path& path,
       throw Error::In(path.string(), "cannot replace it with " + tmp.string() +
                                          ": " + ec.message());
     }
+  } catch (const fs::filesystem_error& e) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw WriteFailure(path, e.code().message());
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
@@ -146,10 +184,7 @@ void WriteFileAtomically(const fs::path& path, std::string_view bytes) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.flush();
-    if (!out) {
-      throw Error::In(tmp.string(),
-                      std::string("write failed: ") + std::strerror(errno));
-    }
+    if (!out) throw WriteFailure(path, std::strerror(errno));
   });
 }
 

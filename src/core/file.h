@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "src/core/error.h"
+
 namespace pano4d {
 
 // Whole-file reads that throw pano4d::Error naming the path when the file is
@@ -22,12 +24,29 @@ std::filesystem::path TemporaryPathFor(const std::filesystem::path& path);
 // Writes through `write(tmp)` to a temporary file, then renames it onto
 // `path`, so a reader never sees a half-written file and a killed run leaves
 // the previous version intact. Creates the parent directory. If `write`
-// throws, the temporary is removed and the exception propagates.
+// throws, the temporary is removed and the exception propagates (a
+// std::filesystem error as a WriteFailure naming `path`).
 void WriteAtomically(
     const std::filesystem::path& path,
     const std::function<void(const std::filesystem::path&)>& write);
 void WriteFileAtomically(const std::filesystem::path& path,
                          std::string_view bytes);
+
+// Less room than this on a file system after a write failed there: the disk
+// is taken to be full. A write that fills a disk leaves a little room free
+// (blocks it could not use, space reserved for root), so the test is not
+// "zero bytes".
+inline constexpr std::uintmax_t kFullDiskBytes = std::uintmax_t{1} << 20;
+
+// Whether the file system holding `path` (or its nearest existing parent)
+// has less than kFullDiskBytes available; false when that cannot be told.
+bool DiskIsFull(const std::filesystem::path& path);
+
+// The Error for a failed write of `path`, `why` being the system's reason.
+// A full disk does not always read as such (a copy through sendfile reports
+// "Input/output error", OpenCV reports nothing), so when DiskIsFull the
+// message says so, with the room left, and what to do.
+Error WriteFailure(const std::filesystem::path& path, const std::string& why);
 
 // Removes the temporaries that WriteAtomically left under `dir` (recursive)
 // when its process was killed: files named like TemporaryPathFor's whose

@@ -136,7 +136,7 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
     const std::uint64_t sum = checksum.value();
     out.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
     out.flush();
-    if (!out) throw Error(tmp.string(), "", "", "write failed (disk full?)");
+    if (!out) throw WriteFailure(path, std::strerror(errno));
   });
 }
 

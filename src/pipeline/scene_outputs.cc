@@ -6,6 +6,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "src/core/error.h"
+#include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/gs/trainer.h"
@@ -85,9 +86,6 @@ cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
   return Image::FromRgb32f(rgb).ToBgr8();
 }
 
-// Less room than this after writing a video: it was probably cut short.
-constexpr std::uintmax_t kMinVideoDiskBytes = 1u << 20;
-
 bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
                 double fps, std::vector<std::string>* notes) {
   if (frames.empty()) return false;
@@ -100,14 +98,9 @@ bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
                          frames.front().size());
   // OpenCV reports neither why it could not open a writer nor a failed
   // write: a disk with almost no room left is the likely cause to name.
-  const auto disk_full = [&] {
-    std::error_code ec;
-    const fs::space_info space = fs::space(path.parent_path(), ec);
-    return !ec && space.available < kMinVideoDiskBytes;
-  };
   if (!writer.isOpened()) {
     notes->push_back(path.filename().string() +
-                     (disk_full() ? ": the disk holding it is full"
+                     (DiskIsFull(path) ? ": the disk holding it is full"
                                   : ": OpenCV could not open an MP4 writer (no "
                                     "FFmpeg backend?)") +
                      "; the PNG frames have the same views");
@@ -116,7 +109,7 @@ bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
   for (const cv::Mat& f : frames) writer.write(f);
   writer.release();
   std::error_code ec;
-  if (disk_full() || !fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
+  if (DiskIsFull(path) || !fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
     fs::remove(partial, ec);
     notes->push_back(path.filename().string() +
                      ": not written in full (the disk holding it is full?); "

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -405,6 +406,21 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
   EXPECT_EQ(header["extras"]["cameras"]["training"].size(),
             frames["train"].size());
   EXPECT_NE(Slurp(log).find("a PLY per time"), std::string::npos) << Slurp(log);
+  // On a disk that fills up: the disk named as full, the folder marked
+  // incomplete.
+  testing::SmallDisk disk(64);
+  if (disk.mounted()) {
+    const std::string to_disk = "PANO4D_VIEWER_DIR='" + libraries.string() +
+                                "' " + PANO4D_BINARY_DIR + "/pano4d view" + w +
+                                " --out '" + (disk / "view").string() + "'";
+    EXPECT_EQ(testing::RunLogged(to_disk, log), 1);
+    EXPECT_NE(Slurp(log).find("the disk holding it is full"), std::string::npos)
+        << Slurp(log);
+    EXPECT_TRUE(fs::exists(disk / "view" / "INCOMPLETE"));
+  } else {
+    std::cerr << "SMALL DISK UNAVAILABLE, view on a full disk not tested: "
+              << disk.why() << "\n";
+  }
   // Without npm's libraries: the file and the command that installs it.
   fs::remove(libraries /
              "node_modules/@sparkjsdev/spark/dist/spark.module.min.js");

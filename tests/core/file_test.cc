@@ -3,6 +3,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <functional>
+#include <string>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
@@ -11,6 +15,7 @@
 namespace pano4d {
 namespace {
 
+using testing::SmallDisk;
 using testing::TempDir;
 
 int CountEntries(const std::filesystem::path& dir) {
@@ -100,6 +105,39 @@ TEST(FileTest, FailedWriteKeepsThePreviousVersion) {
                Error);
   EXPECT_EQ(ReadTextFile(path), "good");
   EXPECT_EQ(CountEntries(dir.path()), 1);
+}
+
+// A disk that fills up for real: the write fails naming the file and
+// saying the disk is full (a copy through sendfile reports only
+// "Input/output error"), and the earlier version stays.
+TEST(FileTest, AFullDiskIsNamedAsSuchAndKeepsThePreviousVersion) {
+  SmallDisk disk(256);
+  if (!disk.mounted()) GTEST_SKIP() << "SMALL DISK UNAVAILABLE: " << disk.why();
+  const auto path = disk / "scene.bin";
+  WriteFileAtomically(path, "good");
+  const std::string big(1 << 20, 'x');
+  TempDir elsewhere;
+  WriteFileAtomically(elsewhere / "big.bin", big);
+  const std::vector<std::function<void()>> writes = {
+      [&] { WriteFileAtomically(path, big); },
+      [&] {
+        WriteAtomically(path, [&](const std::filesystem::path& tmp) {
+          std::filesystem::copy_file(elsewhere / "big.bin", tmp);
+        });
+      }};
+  for (const auto& write : writes) {
+    try {
+      write();
+      ADD_FAILURE() << "a 1 MiB write fitted on a 256 KiB disk";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.source(), path.string());
+      EXPECT_NE(e.problem().find("the disk holding it is full"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_EQ(ReadTextFile(path), "good");
+    EXPECT_EQ(CountEntries(disk.path()), 1);
+  }
 }
 
 TEST(FileTest, ReadErrorsNameThePath) {

@@ -1,8 +1,11 @@
 #include "tests/support/test_files.h"
 
+#include <sys/mount.h>
 #include <sys/wait.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -22,6 +25,21 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+SmallDisk::SmallDisk(int kib) {
+  const std::string options = "size=" + std::to_string(kib) + "k";
+  mounted_ = ::mount("tmpfs", dir_.path().c_str(), "tmpfs", 0,
+                     options.c_str()) == 0;
+  if (!mounted_) {
+    why_ = "mounting a " + std::to_string(kib) + " KiB tmpfs on " +
+           dir_.path().string() + " failed (" + std::strerror(errno) +
+           "): the test needs root";
+  }
+}
+
+SmallDisk::~SmallDisk() {
+  if (mounted_) ::umount2(dir_.path().c_str(), MNT_DETACH);
 }
 
 void WriteTruncatedPng(const std::filesystem::path& path) {

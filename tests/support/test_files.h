@@ -19,6 +19,27 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// A tmpfs of `kib` KiB mounted on a fresh folder and unmounted on
+// destruction, to fill a disk for real. Mounting needs root (CI runs as
+// root); where it fails, mounted() is false and why() says why, for the
+// test's loud skip.
+class SmallDisk {
+ public:
+  explicit SmallDisk(int kib);
+  ~SmallDisk();
+  bool mounted() const { return mounted_; }
+  const std::string& why() const { return why_; }
+  const std::filesystem::path& path() const { return dir_.path(); }
+  std::filesystem::path operator/(const std::string& name) const {
+    return dir_ / name;
+  }
+
+ private:
+  TempDir dir_;
+  bool mounted_ = false;
+  std::string why_;
+};
+
 // Writes a small valid PNG, then cuts it to half its size.
 void WriteTruncatedPng(const std::filesystem::path& path);
 void WriteText(const std::filesystem::path& path, const std::string& text);
