@@ -89,13 +89,23 @@ cv::Mat SceneRenderer::Render(const RasterCamera& camera, int time) {
 bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
                 double fps, std::vector<std::string>* notes) {
   if (frames.empty()) return false;
+  const cv::Size size = frames.front().size();
+  if (size.width > kMaxMpeg4Side || size.height > kMaxMpeg4Side) {
+    notes->push_back(path.filename().string() + ": frames of " +
+                     std::to_string(size.width) + "x" +
+                     std::to_string(size.height) +
+                     " are larger than MPEG-4 takes (" +
+                     std::to_string(kMaxMpeg4Side) +
+                     " a side); the PNG frames have the same views");
+    return false;
+  }
   // OpenCV picks the container from the extension, so the temporary name
   // keeps it.
   const fs::path partial =
       path.parent_path() / (path.stem().string() + ".partial.mp4");
   cv::VideoWriter writer(partial.string(),
                          cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
-                         frames.front().size());
+                         size);
   // OpenCV reports neither why it could not open a writer nor a failed
   // write: a disk with almost no room left is the likely cause to name.
   if (!writer.isOpened()) {

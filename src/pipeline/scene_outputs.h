@@ -47,9 +47,13 @@ class SceneRenderer {
   RenderOutput out_;
 };
 
+// The largest side MPEG-4 part 2 (mp4v) encodes: FFmpeg refuses 8192.
+inline constexpr int kMaxMpeg4Side = 8191;
+
 // An MP4 (OpenCV's FFmpeg backend, mp4v) written under a temporary name and
-// renamed when complete. Without a backend that opens, returns false and adds
-// a note saying so.
+// renamed when complete. Frames larger than kMaxMpeg4Side, a backend that
+// does not open, or a disk that fills: returns false and adds a note that
+// says which.
 bool WriteVideo(const std::filesystem::path& path,
                 const std::vector<cv::Mat>& frames, double fps,
                 std::vector<std::string>* notes);
