@@ -39,12 +39,13 @@ std::string FormatRate(double per_second) {
 }  // namespace
 
 ProgressBar::ProgressBar(std::string label, std::int64_t total,
-                         std::ostream& out, Mode mode)
+                         std::ostream& out, Mode mode, double show_after_s)
     : label_(std::move(label)),
       total_(total),
       out_(out),
       mode_(mode == Mode::kAuto ? (IsTerminal(out) ? Mode::kLive : Mode::kPlain)
                                 : mode),
+      show_after_s_(show_after_s),
       start_(std::chrono::steady_clock::now()) {
   if (mode_ == Mode::kLive) Draw(false);
 }
@@ -54,7 +55,8 @@ ProgressBar::~ProgressBar() {
   // error message follows anyway.
   if (std::uncaught_exceptions() > 0) {
     finished_ = true;
-    if (mode_ == Mode::kLive) internal::WriteConsole(out_, "\n", false);
+    if (mode_ == Mode::kLive && last_draw_s_ >= 0)
+      internal::WriteConsole(out_, "\n", false);
     return;
   }
   Finish();
@@ -95,7 +97,9 @@ void ProgressBar::Finish() {
 }
 
 void ProgressBar::Draw(bool finished) {
-  last_draw_s_ = ElapsedSeconds();
+  const double now = ElapsedSeconds();
+  if (last_draw_s_ < 0 && now < show_after_s_) return;  // quick: silent
+  last_draw_s_ = now;
   const std::string line =
       FormatLine(label_, done_, total_, last_draw_s_, status_, finished);
   if (mode_ == Mode::kLive) {

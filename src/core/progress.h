@@ -19,8 +19,12 @@ class ProgressBar {
   enum class Mode { kAuto, kLive, kPlain, kOff };
 
   // total <= 0: unknown length (counts and rate, no bar or ETA).
+  // show_after_s > 0: nothing is shown unless the loop is still running
+  // that long after the bar was made (a step inside a longer loop that is
+  // usually quick, such as one expansion step, stays silent then).
   ProgressBar(std::string label, std::int64_t total,
-              std::ostream& out = std::cerr, Mode mode = Mode::kAuto);
+              std::ostream& out = std::cerr, Mode mode = Mode::kAuto,
+              double show_after_s = 0);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
@@ -50,6 +54,7 @@ class ProgressBar {
   std::int64_t total_;
   std::ostream& out_;
   Mode mode_;
+  double show_after_s_;
   std::string status_;
   std::int64_t done_ = 0;
   bool finished_ = false;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iostream>
 #include <numeric>
 #include <sstream>
 
@@ -16,6 +17,7 @@
 #include "src/core/median.h"
 #include "src/core/memory.h"
 #include "src/core/npy.h"
+#include "src/core/progress.h"
 #include "src/core/strings.h"
 #include "src/geometry/inpaint.h"
 #include "src/geometry/point_cloud.h"
@@ -32,6 +34,10 @@ namespace {
 constexpr double kExpandedViewBytesPerPixel = 32;
 
 constexpr double kDegrees = M_PI / 180.0;
+// An expansion step shows its own progress bar (views done) only when it
+// runs longer than this: many directions or large frames; a usual step
+// stays one log line.
+constexpr double kStepProgressAfterSeconds = 10;
 // Rendered depth is trusted where the Gaussians are this opaque: at
 // semi-transparent edges the expected depth lies between surfaces.
 constexpr float kWarpAlpha = 0.5f;
@@ -423,6 +429,10 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   std::vector<double> point_depths, focals;
   double hole_sum = 0, holes = 0, prefilled = 0, cracks = 0;
   Json cameras_json = Json::array();
+  ProgressBar bar(StringPrintf("expansion step %d (%g deg)", e,
+                               report.angle_degrees),
+                  static_cast<std::int64_t>(cams.size()), std::cerr,
+                  ProgressBar::Mode::kAuto, kStepProgressAfterSeconds);
   for (int m = 0; m < directions; ++m) {
     PriorClip clip;
     clip.name = "step" + ZeroPadded(e, 2) + "_dir" + std::to_string(m);
@@ -506,7 +516,9 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
       refined.convertTo(stored.target, CV_8UC3, 255.0);
       views_.push_back(std::move(stored));
     }
+    bar.Add(static_cast<std::int64_t>(ns));
   }
+  bar.Finish();
   WriteJson(dir / "cameras.json", {{"step", e},
                                    {"angle_degrees", report.angle_degrees},
                                    {"views", cameras_json}});

@@ -82,6 +82,25 @@ TEST(ProgressTest, NoFinalLineWhenAnErrorUnwinds) {
   EXPECT_NE(out.str().find(" 50%"), std::string::npos);
 }
 
+// A bar that shows only past a delay: a loop quicker than that prints
+// nothing in either mode; the same loop without the delay does.
+TEST(ProgressTest, AQuickLoopUnderItsDelayIsSilent) {
+  for (const ProgressBar::Mode mode :
+       {ProgressBar::Mode::kPlain, ProgressBar::Mode::kLive}) {
+    std::ostringstream quiet, shown;
+    {
+      ProgressBar bar("step", 10, quiet, mode, /*show_after_s=*/3600);
+      for (int i = 0; i < 10; ++i) bar.Add();
+    }
+    {
+      ProgressBar bar("step", 10, shown, mode);
+      for (int i = 0; i < 10; ++i) bar.Add();
+    }
+    EXPECT_TRUE(quiet.str().empty()) << quiet.str();
+    EXPECT_NE(shown.str().find("100%  10/10"), std::string::npos);
+  }
+}
+
 TEST(ProgressTest, OffModeIsSilent) {
   std::ostringstream out;
   {
