@@ -418,6 +418,19 @@ TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
                 .at("iterations")
                 .get<int>(),
             10);
+
+  // While a --force fit has not completed, its checkpoint is not there yet
+  // and the earlier one is in previous_fit: export says so, not "run pano4d
+  // fit first".
+  fs::rename(ws / "pano4d/checkpoints/fit.ckpt",
+             ws / "pano4d/previous_fit/checkpoints/fit.ckpt");
+  EXPECT_EQ(RunPano4d("export --workspace '" + ws.string() + "'",
+                      ws / "export.log"),
+            1);
+  const std::string export_log = Slurp(ws / "export.log");
+  EXPECT_NE(export_log.find("previous_fit"), std::string::npos) << export_log;
+  EXPECT_NE(export_log.find("has not completed"), std::string::npos)
+      << export_log;
 }
 
 // Ctrl-C while the prior command runs: the command's process group is

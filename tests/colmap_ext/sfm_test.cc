@@ -312,6 +312,34 @@ TEST(SfmInputTest, AWorkspacesOwnImagesAreNeverOverwritten) {
   EXPECT_EQ(ReadImage(image).width(), 8);
 }
 
+// One frame: the error names the input and suggests only what `run` and
+// `sfm` have (run has no --stride).
+TEST(SfmInputTest, OneFrameIsNamedWithARemedyTheCommandsHave) {
+  if (!FindOnPath("colmap")) {
+    GTEST_SKIP() << "COLMAP MISSING: colmap is not on PATH";
+  }
+  testing::TempDir dir;
+  WritePng8(dir / "frames" / "a.png",
+            cv::Mat(8, 8, CV_8UC3, cv::Scalar(10, 20, 30)));
+  SfmOptions options;
+  options.images = dir / "frames";
+  options.workspace = dir / "ws";
+  try {
+    RunSfm(options);
+    ADD_FAILURE() << "one frame was accepted";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find((dir / "frames").string()), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("gave 1 frame(s); SfM needs at least 2"),
+              std::string::npos)
+        << message;
+    EXPECT_NE(message.find("with `pano4d sfm` a lower --stride"),
+              std::string::npos)
+        << message;
+  }
+}
+
 TEST_F(SfmTest, KnownPosesAreKeptAndTriangulated) {
   SfmOptions options;
   for (const DatasetFrame& frame : dataset_->train)
