@@ -1,5 +1,6 @@
 // The real lady-running capture through `pano4d run` (sfm, plane-sweep
-// depth, fit and expansion), every 8th frame held out (labels real-data and
+// depth, fit and expansion; the only SfM of a real video in the suite),
+// every 8th frame held out (labels real-data and
 // colmap; says REAL DATA MISSING or COLMAP MISSING and skips when its input is
 // absent).
 #include <cstdio>
@@ -71,6 +72,19 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
   }
   EXPECT_TRUE(fs::exists(ws / "report/expanded_sheet.png"));
   EXPECT_TRUE(fs::exists(ws / "report/index.md"));
+  // The in-the-wild SfM: a handheld video of a running person.
+  const nlohmann::json sfm =
+      nlohmann::json::parse(Slurp(ws / "pano4d/sfm.json"));
+  std::printf(
+      "lady-running sfm: %d of %d frames registered, %d points, mean "
+      "reprojection error %.3f px, %.1f%% of pixels masked as dynamic\n",
+      sfm.at("registered").get<int>(), sfm.at("frames").get<int>(),
+      sfm.at("points3D").get<int>(),
+      sfm.at("mean_reprojection_error_px").get<double>(),
+      100 * sfm.at("mean_dynamic_fraction").get<double>());
+  EXPECT_GT(sfm.at("frames").get<int>(), 50);
+  EXPECT_GE(sfm.at("posed_fraction").get<double>(), 0.9) << sfm.dump();
+  EXPECT_LT(sfm.at("mean_reprojection_error_px").get<double>(), 2.0);
   const nlohmann::json frames =
       nlohmann::json::parse(Slurp(ws / "pano4d/frames.json"));
   const nlohmann::json fit =
