@@ -1,4 +1,4 @@
-// pano4d bench: speed and accuracy tables (src/pipeline/bench.h), printed as
+// pano4d bench: speed and accuracy tables (src/lab/bench.h), printed as
 // a table or with --json one JSON object per row.
 #include <cstdio>
 #include <iostream>
@@ -10,7 +10,7 @@
 #include "src/cli/options.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 
 namespace pano4d::cli {
 namespace {

@@ -1,6 +1,6 @@
 // pano4d bench stability, budget and datasets: the suites that fit scenes
 // (the synthetic scene through the fit controller; a benchmark's scenes
-// through `pano4d run`) (src/pipeline/bench.h).
+// through `pano4d run`) (src/lab/bench.h).
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -10,7 +10,7 @@
 #include "src/cli/app.h"
 #include "src/cli/options.h"
 #include "src/core/json.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 
 namespace pano4d::cli {
 

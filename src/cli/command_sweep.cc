@@ -1,11 +1,11 @@
-// pano4d sweep: benchmark sweeps as job arrays (src/pipeline/sweep.h).
+// pano4d sweep: benchmark sweeps as job arrays (src/lab/sweep.h).
 #include <cstdio>
 #include <memory>
 
 #include <CLI/CLI.hpp>
 
 #include "src/cli/app.h"
-#include "src/pipeline/sweep.h"
+#include "src/lab/sweep.h"
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "src/core/error.h"
-#include "src/pipeline/sweep.h"
+#include "src/lab/sweep.h"
 
 namespace {
 

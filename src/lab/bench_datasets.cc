@@ -18,7 +18,7 @@
 #include "src/datasets/kubric_dataset.h"
 #include "src/datasets/nvidia_dataset.h"
 #include "src/datasets/priors.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 #include "src/pipeline/eval.h"
 
 namespace pano4d {

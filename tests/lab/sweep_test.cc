@@ -1,7 +1,7 @@
 // `pano4d sweep` as a lab runs it, without a cluster: plan, run one entry
 // by index (also from $SLURM_ARRAY_TASK_ID), local, collect with a failing
 // entry, the batch script. The real Slurm test is sweep_slurm_test.cc.
-#include "src/pipeline/sweep.h"
+#include "src/lab/sweep.h"
 
 #include <cstdlib>
 #include <filesystem>

@@ -15,7 +15,7 @@
 #include "src/core/log.h"
 #include "src/core/workspace.h"
 #include "src/datasets/synth_generate.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 #include "src/pipeline/depth.h"
 #include "src/pipeline/fit.h"
 

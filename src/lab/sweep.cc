@@ -1,4 +1,4 @@
-#include "src/pipeline/sweep.h"
+#include "src/lab/sweep.h"
 
 #include <unistd.h>
 
@@ -21,7 +21,7 @@
 #include "src/core/subprocess.h"
 #include "src/core/workspace.h"
 #include "src/core/workspace_lock.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;

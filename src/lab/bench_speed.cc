@@ -15,7 +15,7 @@
 #include "src/core/version.h"
 #include "src/core/workspace.h"
 #include "src/gs/trainer.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 #include "src/pipeline/fit_options.h"
 #include "src/render/bench_scene.h"
 #include "src/render/rasterizer.h"

@@ -23,7 +23,7 @@
 #include "src/gs/trainer.h"
 #include "src/pano/trajectory.h"
 #include "src/pano/warp.h"
-#include "src/pipeline/bench.h"
+#include "src/lab/bench.h"
 #include "src/pipeline/depth.h"
 #include "src/pipeline/fit.h"
 #include "src/render/bench_scene.h"
