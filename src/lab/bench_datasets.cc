@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "evaluation/evaluate.h"
+#include "src/core/csv.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/json.h"
@@ -157,26 +158,18 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   return e;
 }
 
-std::string CsvField(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  if (s.find_first_of(",\"") == std::string::npos) return s;
-  std::string quoted = "\"";
-  for (const char c : s)
-    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
-std::string CsvRow(const std::string& scene, const std::string& suite,
+std::string TableCsvRow(const std::string& scene, const std::string& suite,
                    const std::string& method, const std::string& source,
                    const std::string& status, const std::string& error,
                    const MetricRow& values, const std::string& seconds,
                    const std::string& memory) {
-  std::string row = CsvField(scene) + "," + suite + "," + CsvField(method) +
-                    "," + CsvField(source) + "," + status + "," +
-                    CsvField(error);
+  std::vector<std::string> fields = {scene, suite, method, source, status,
+                                     error};
   for (std::size_t k = 0; k < kNumMetrics; ++k)
-    row += "," + (values[k] ? StringPrintf("%.6f", *values[k]) : std::string());
-  return row + "," + seconds + "," + memory + "\n";
+    fields.push_back(values[k] ? StringPrintf("%.6f", *values[k]) : "");
+  fields.push_back(seconds);
+  fields.push_back(memory);
+  return CsvRow(fields);
 }
 
 }  // namespace
@@ -305,13 +298,13 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
         e.scene, e.suite,
         e.status == "done" ? "pano4d" : "pano4d: " + e.status + ": " + e.error,
         e.values, seconds, memory);
-    csv << CsvRow(e.scene, e.suite, "pano4d", "pano4d", e.status, e.error,
+    csv << TableCsvRow(e.scene, e.suite, "pano4d", "pano4d", e.status, e.error,
                   e.values, seconds, memory);
     for (const PublishedRow& p : PublishedRows(benchmarks[e.suite], e.scene)) {
       if (p.mean) continue;
       md << BenchMarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
                              p.values, "", "");
-      csv << CsvRow(e.scene, e.suite, p.method, p.source, "published", "",
+      csv << TableCsvRow(e.scene, e.suite, p.method, p.source, "published", "",
                     p.values, "", "");
     }
     result.rows.push_back(e.ToJson());
@@ -351,12 +344,12 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
         done.empty() ? "" : StringPrintf("%.0f", seconds / done.size());
     const std::string m = done.empty() ? "" : StringPrintf("%.0f", memory);
     md << BenchMarkdownRow("mean", suite, "pano4d, " + label, mean, s, m);
-    csv << CsvRow("mean", suite, "pano4d", label, "mean", "", mean, s, m);
+    csv << TableCsvRow("mean", suite, "pano4d", label, "mean", "", mean, s, m);
     for (const PublishedRow& p : PublishedRows(benchmarks[suite], "")) {
       if (!p.mean) continue;
       md << BenchMarkdownRow("mean", suite, p.method + " (" + p.source + ")",
                              p.values, "", "");
-      csv << CsvRow("mean", suite, p.method, p.source, "published", "",
+      csv << TableCsvRow("mean", suite, p.method, p.source, "published", "",
                     p.values, "", "");
     }
   }

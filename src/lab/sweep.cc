@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "evaluation/evaluate.h"
+#include "src/core/csv.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/log.h"
@@ -525,17 +526,20 @@ SweepTable CollectSweep(const fs::path& sweep) {
       md << " " << BenchCell(values[k], k) << " |";
     md << " " << StringPrintf("%.0f", secs) << " | "
        << StringPrintf("%.0f", memory) << " |\n";
-    std::string quoted = error;
-    std::replace(quoted.begin(), quoted.end(), '"', '\'');
-    std::replace(quoted.begin(), quoted.end(), '\n', ' ');
-    csv << index << "," << scene << "," << e["suite"].get<std::string>() << ","
-        << config << "," << e["seed"].get<int>() << "," << status << ",\""
-        << quoted << "\"";
+    std::vector<std::string> fields = {std::to_string(index),
+                                       scene,
+                                       e["suite"].get<std::string>(),
+                                       config,
+                                       std::to_string(e["seed"].get<int>()),
+                                       status,
+                                       error};
     for (std::size_t k = 0; k < kNumMetrics; ++k)
-      csv << "," << (values[k] ? StringPrintf("%.6f", *values[k]) : "");
-    csv << "," << StringPrintf("%.1f", secs) << ","
-        << StringPrintf("%.0f", memory) << ","
-        << (s.is_object() ? s.value("attempts", 0) : 0) << "\n";
+      fields.push_back(values[k] ? StringPrintf("%.6f", *values[k]) : "");
+    fields.push_back(StringPrintf("%.1f", secs));
+    fields.push_back(StringPrintf("%.0f", memory));
+    fields.push_back(
+        std::to_string(s.is_object() ? s.value("attempts", 0) : 0));
+    csv << CsvRow(fields);
   }
 
   // Per scene and configuration, bench datasets' table: the mean over the
