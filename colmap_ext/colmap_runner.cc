@@ -94,14 +94,9 @@ ColmapRun ColmapRunner::Run(const std::string& subcommand,
   const ProcessResult result = RunProcess(argv, log);
   ColmapRun run{subcommand, log, result.seconds};
   if (result.ok()) return run;
-  const std::string how = result.How();
   std::string problem =
-      "colmap " + subcommand + " failed (" + how + "); log: " + log.string();
+      "colmap " + subcommand + " failed: " + ProcessFailure(result, log);
   if (!remedy.empty()) problem += "; likely remedy: " + remedy;
-  // One line, as every pano4d error: the log's last lines joined.
-  std::string tail = LastLines(log, 2);
-  std::replace(tail.begin(), tail.end(), '\n', '|');
-  if (!tail.empty()) problem += "; the log ends: " + tail;
   throw Error("colmap", subcommand, "", problem);
 }
 

@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
@@ -19,6 +21,7 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/stop_signal.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 
 extern char** environ;
@@ -42,9 +45,12 @@ std::optional<fs::path> FindOnPath(const std::string& name) {
 }
 
 std::string ProcessResult::How() const {
-  if (timed_out) return "stopped at its time limit";
-  return signal != 0 ? "killed by signal " + std::to_string(signal)
-                     : "exit status " + std::to_string(exit_code);
+  if (timed_out)
+    return StringPrintf("stopped at its time limit of %g s", time_limit_s);
+  if (signal != 0) return "killed by signal " + std::to_string(signal);
+  // 127 is the shell's "command not found".
+  return "exit status " + std::to_string(exit_code) +
+         (exit_code == 127 ? " (command not found?)" : "");
 }
 
 namespace {
@@ -263,6 +269,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
       status = *done;
     } else {
       r.timed_out = g_received == 0;
+      r.time_limit_s = options.timeout_seconds;
       status = StopGroup(pid, &usage, what);
     }
     const int received = g_received;
@@ -290,6 +297,27 @@ std::string LastLines(const fs::path& path, int count) {
   std::string out;
   for (const std::string& l : lines) out += (out.empty() ? "" : "\n") + l;
   return out;
+}
+
+std::string ProcessFailure(const ProcessResult& result, const fs::path& log) {
+  std::istringstream lines(LastLines(log, 40));
+  std::string line, why, last;
+  while (std::getline(lines, line)) {
+    // RunProcess heads the log with the command line ("$ ...").
+    if (line.rfind("$ ", 0) == 0) continue;
+    last = line;
+    std::string lower = line;
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    if (lower.find("error") != std::string::npos ||
+        lower.find("failed") != std::string::npos)
+      why = line;
+  }
+  if (why.empty()) why = last;
+  if (why.size() > kQuotedLogChars) why = why.substr(0, kQuotedLogChars) + "...";
+  std::string text = result.How();
+  if (!why.empty()) text += ": \"" + why + "\"";
+  return text + " (log: " + log.string() + ")";
 }
 
 }  // namespace pano4d

@@ -22,12 +22,14 @@ struct ProcessResult {
   int exit_code = -1;      // -1 when killed by a signal
   int signal = 0;          // the signal that killed it, or 0
   bool timed_out = false;  // stopped at ProcessOptions::timeout_seconds
+  double time_limit_s = 0;  // that limit, when timed_out
   double seconds = 0.0;
   // Peak resident memory of the child or its largest waited-for descendant
   // (wait4's ru_maxrss), in MiB.
   double peak_memory_mib = 0.0;
   bool ok() const { return exit_code == 0; }
-  // "exit status 3", "killed by signal 9", "stopped at its time limit"
+  // "exit status 3", "exit status 127 (command not found?)", "killed by
+  // signal 9", "stopped at its time limit of 0.5 s"
   std::string How() const;
 };
 
@@ -81,7 +83,17 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
                          const std::filesystem::path& log,
                          const ProcessOptions& options = {});
 
-// The last `count` non-empty lines of a text file (for error messages).
+// The last `count` non-empty lines of a text file.
 std::string LastLines(const std::filesystem::path& path, int count);
+
+// One line saying how a child failed, for an error message: its How(), the
+// line of its log that says why, quoted, and the log, e.g.
+//   exit status 1: "pano4d: error: ..." (log: WS/logs/run.log)
+// The line is the last of the log's last 40 that holds "error" or
+// "failed" (any case), else its last line (never the command line
+// RunProcess heads the log with), shortened to kQuotedLogChars.
+inline constexpr std::size_t kQuotedLogChars = 300;
+std::string ProcessFailure(const ProcessResult& result,
+                           const std::filesystem::path& log);
 
 }  // namespace pano4d

@@ -134,8 +134,4 @@ std::string BenchMarkdownRow(const std::string& scene, const std::string& suite,
                              const std::string& memory);
 nlohmann::json SuiteBenchmarkMeta(const std::string& suite);
 
-// How a failed child run ended and the line of its log that says why.
-std::string RunFailure(const std::filesystem::path& log,
-                       const ProcessResult& result);
-
 }  // namespace pano4d

@@ -53,15 +53,6 @@ Json SuiteBenchmarkMeta(const std::string& suite) {
                        suite == "kubric" ? "kubric4d" : suite);
 }
 
-std::string RunFailure(const fs::path& log, const ProcessResult& r) {
-  std::istringstream lines(LastLines(log, 40));
-  std::string line, error;
-  while (std::getline(lines, line))
-    if (line.find("error") != std::string::npos) error = line;
-  if (error.empty()) error = LastLines(log, 1);
-  return r.How() + ": " + error;
-}
-
 std::vector<std::string> BenchRunCommand(const fs::path& executable,
                                          const BenchScene& scene,
                                          const fs::path& workspace,
@@ -142,7 +133,7 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
   e.peak_memory_mib = r.peak_memory_mib;
   if (!r.ok()) {
     e.status = "failed";
-    e.error = RunFailure(log, r);
+    e.error = ProcessFailure(r, log);
   } else {
     try {
       const nlohmann::json m = ReadJson(ws.metrics() / "metrics.json");

@@ -338,7 +338,7 @@ SweepOutcome RunSweepEntry(const fs::path& sweep, int index,
     outcome = SweepOutcome::kStopped;
   } else if (!r.ok()) {
     status["status"] = "failed";
-    status["error"] = RunFailure(log, r);
+    status["error"] = ProcessFailure(r, log);
     outcome = SweepOutcome::kFailed;
   } else {
     const Workspace ws(entry["workspace"].get<std::string>());
@@ -451,11 +451,9 @@ std::string SubmitSbatch(const fs::path& script) {
   const fs::path log = script.parent_path() / "logs" / "sbatch.log";
   const ProcessResult r =
       RunProcess({sbatch->string(), "--parsable", script.string()}, log);
+  if (!r.ok())
+    throw Error("sbatch", script.string(), "", "failed: " + ProcessFailure(r, log));
   const std::string last = LastLines(log, 1);
-  if (!r.ok()) {
-    throw Error("sbatch", script.string(), "",
-                "failed (" + r.How() + "): " + last);
-  }
   return last.substr(0, last.find_first_of(";\n"));
 }
 

@@ -37,8 +37,6 @@ constexpr double kInpaintRadius = 3.0;
 // The colour of a pixel nothing in the clip says anything about: neutral,
 // so that a later refinement pulls it either way equally.
 constexpr float kUnknownGrey = 0.5f;
-// The tail of a failed command's log quoted in the message (characters).
-constexpr std::size_t kLogQuoteChars = 200;
 
 std::string SizeText(int width, int height) {
   return std::to_string(width) + "x" + std::to_string(height);
@@ -229,20 +227,6 @@ void WriteCommandInput(const PriorClip& clip, const fs::path& in) {
   WriteJson(in / "meta.json", meta);
 }
 
-// The last non-empty line the command wrote to its log (after the command
-// line RunProcess heads it with), shortened, for the error message.
-std::string LastLogLine(const fs::path& log) {
-  std::ifstream stream(log);
-  std::string line, last;
-  std::getline(stream, line);  // "$ /bin/sh -c ..."
-  while (std::getline(stream, line)) {
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  }
-  if (last.size() > kLogQuoteChars)
-    last = last.substr(0, kLogQuoteChars) + "...";
-  return last;
-}
-
 // Runs the shell command line in its own process group, output to `log`,
 // stopped after `timeout_seconds` (0: no limit); returns the problem, empty
 // when it exited 0.
@@ -252,21 +236,7 @@ std::string RunShell(const std::string& line, const fs::path& log,
                                      {.timeout_seconds = timeout_seconds,
                                       .own_group = true});
   if (r.ok()) return "";
-  std::string problem;
-  if (r.timed_out) {
-    problem = StringPrintf(
-        "was stopped at its time limit of %g s (--prior-timeout)",
-        timeout_seconds);
-  } else if (r.signal != 0) {
-    problem = "was killed by signal " + std::to_string(r.signal);
-  } else {
-    problem = "exited with status " + std::to_string(r.exit_code);
-    if (r.exit_code == 127) problem += " (command not found?)";
-  }
-  const std::string last = LastLogLine(log);
-  if (!last.empty()) problem += ": \"" + last + "\"";
-  problem += " (log: " + log.string() + ")";
-  return problem;
+  return ProcessFailure(r, log) + (r.timed_out ? " (--prior-timeout)" : "");
 }
 
 bool InUnitRange(const cv::Mat& m) {

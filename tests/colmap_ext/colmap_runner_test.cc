@@ -57,7 +57,7 @@ TEST(ColmapRunnerTest, FailureNamesStepStatusLogRemedyAndLastLines) {
     FAIL() << "no error";
   } catch (const Error& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("colmap mapper failed (exit status 3)"),
+    EXPECT_NE(what.find("colmap mapper failed: exit status 3"),
               std::string::npos)
         << what;
     EXPECT_NE(what.find(log.string()), std::string::npos) << what;
