@@ -2,14 +2,11 @@
 
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
-
-std::string SizeText(cv::Size size) {
-  return std::to_string(size.width) + "x" + std::to_string(size.height);
-}
 
 void WriteMasks(const std::vector<cv::Mat>& masks,
                 const std::vector<std::string>& image_names,
@@ -29,8 +26,9 @@ void WriteMasks(const std::vector<cv::Mat>& masks,
                   "expected a non-empty CV_8UC1 mask");
     }
     if (masks[i].size() != masks[0].size()) {
-      throw Error(source, "size", SizeText(masks[i].size()),
-                  "expected " + SizeText(masks[0].size()) + " like mask 0");
+      throw Error(source, "size", SizeText(masks[i].cols, masks[i].rows),
+                  "expected " + SizeText(masks[0].cols, masks[0].rows) +
+                      " like mask 0");
     }
     paths.push_back(MaskPathFor(dir, image_names[i]));
   }

@@ -239,10 +239,9 @@ std::vector<std::string> WriteFrames(const SfmOptions& o,
       const Camera& camera = o.known[i].camera.camera;
       if (bgr.cols != camera.width || bgr.rows != camera.height) {
         throw Error(o.known[i].image.string(), "size",
-                    std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows),
+                    SizeText(bgr.cols, bgr.rows),
                     "differs from its camera's " +
-                        std::to_string(camera.width) + "x" +
-                        std::to_string(camera.height));
+                        SizeText(camera.width, camera.height));
       }
       WritePng8(images_dir / o.known[i].name, Resized(bgr, o.max_size));
       names.push_back(o.known[i].name);

@@ -12,6 +12,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/progress.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -40,7 +41,7 @@ fs::path RenderPath(const fs::path& renders, const std::string& id) {
 }
 
 std::string Size(const Image& image) {
-  return std::to_string(image.width()) + "x" + std::to_string(image.height());
+  return SizeText(image.width(), image.height());
 }
 
 std::string Cell(const std::optional<double>& v, const char* format) {
@@ -196,8 +197,7 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
       ++with_mask;
       const cv::Mat raw = ReadMask(f.covisible);
       if (raw.size() != truth.mat().size()) {
-        throw Error(f.covisible.string(), "size",
-                    std::to_string(raw.cols) + "x" + std::to_string(raw.rows),
+        throw Error(f.covisible.string(), "size", SizeText(raw.cols, raw.rows),
                     "expected " + Size(truth) + " like " + f.rgb.string());
       }
       const cv::Mat covisible = MetricMask(raw, f.covisible.string());

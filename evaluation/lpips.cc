@@ -7,6 +7,7 @@
 
 #include "src/core/error.h"
 #include "src/core/npy.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -197,8 +198,7 @@ cv::Mat Lpips::Map(const cv::Mat& a, const cv::Mat& b) const {
   }
   // conv1 (11x11 / 4) then two 3x3 / 2 pools must leave at least one pixel.
   if (a.rows < 35 || a.cols < 35) {
-    throw Error("lpips", "size",
-                std::to_string(a.cols) + "x" + std::to_string(a.rows),
+    throw Error("lpips", "size", SizeText(a.cols, a.rows),
                 "LPIPS needs images of at least 35x35");
   }
   const std::vector<Tensor> fa = Features(a), fb = Features(b);

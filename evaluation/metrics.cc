@@ -7,6 +7,7 @@
 
 #include "src/core/error.h"
 #include "src/core/psnr.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -17,10 +18,6 @@ constexpr double kSsimSigma = 1.5;
 constexpr double kSsimK1 = 0.01;
 constexpr double kSsimK2 = 0.03;
 
-std::string SizeText(const cv::Mat& m) {
-  return std::to_string(m.cols) + "x" + std::to_string(m.rows);
-}
-
 void CheckPair(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
   if (a.type() != CV_64FC3 || b.type() != CV_64FC3) {
     throw Error("metrics", "type",
@@ -28,14 +25,16 @@ void CheckPair(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
                 "images must come from QuantizeForMetrics (CV_64FC3)");
   }
   if (a.size() != b.size()) {
-    throw Error("metrics", "size", SizeText(a) + " vs " + SizeText(b),
+    throw Error("metrics", "size",
+                SizeText(a.cols, a.rows) + " vs " + SizeText(b.cols, b.rows),
                 "the two images must have the same size");
   }
   if (!mask.empty() && (mask.type() != CV_64FC1 || mask.size() != a.size())) {
-    throw Error("metrics", "mask",
-                SizeText(mask) + " type " + std::to_string(mask.type()),
-                "the mask must come from MetricMask and match the image size " +
-                    SizeText(a));
+    throw Error(
+        "metrics", "mask",
+        SizeText(mask.cols, mask.rows) + " type " + std::to_string(mask.type()),
+        "the mask must come from MetricMask and match the image size " +
+            SizeText(a.cols, a.rows));
   }
 }
 
@@ -157,9 +156,9 @@ std::optional<SsimValue> Ssim(const cv::Mat& a, const cv::Mat& b,
                               const cv::Mat& mask) {
   CheckPair(a, b, mask);
   if (a.rows < kSsimWindow || a.cols < kSsimWindow) {
-    throw Error("metrics", "size", SizeText(a),
-                "SSIM needs images of at least " + std::to_string(kSsimWindow) +
-                    "x" + std::to_string(kSsimWindow));
+    throw Error(
+        "metrics", "size", SizeText(a.cols, a.rows),
+        "SSIM needs images of at least " + SizeText(kSsimWindow, kSsimWindow));
   }
   const cv::Mat m =
       mask.empty() ? cv::Mat(a.size(), CV_64FC1, cv::Scalar(1.0)) : mask;

@@ -10,6 +10,7 @@
 #include "src/cli/options.h"
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/strings.h"
 #include "src/lab/bench.h"
 
 namespace pano4d::cli {
@@ -83,12 +84,10 @@ void AddBenchRender(CLI::App* bench, Action* action) {
     *action = [o] {
       if (o->width > 0 || o->height > 0) {
         if (o->width <= 0 || o->height <= 0) {
-          throw Error(
-              "--width/--height", "",
-              std::to_string(o->width) + "x" + std::to_string(o->height),
-              "give both, positive");
+          throw Error("--width/--height", "", SizeText(o->width, o->height),
+                      "give both, positive");
         }
-        o->sizes = {std::to_string(o->width) + "x" + std::to_string(o->height)};
+        o->sizes = {SizeText(o->width, o->height)};
       }
       return Print(RunBenchRender(*o), o->json);
     };

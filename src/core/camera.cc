@@ -8,6 +8,7 @@
 
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -441,8 +442,7 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
 Camera Camera::Rescaled(int new_width, int new_height) const {
   Check();
   if (new_width <= 0 || new_height <= 0) {
-    throw Error("camera", "size",
-                std::to_string(new_width) + "x" + std::to_string(new_height),
+    throw Error("camera", "size", SizeText(new_width, new_height),
                 "rescaled size must be positive");
   }
   const double sx = static_cast<double>(new_width) / width;

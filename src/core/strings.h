@@ -18,6 +18,11 @@ std::string StringPrintf(const char* format, Args... args) {
   return s;
 }
 
+// An image size as messages and tables write it: "480x270" (width first).
+inline std::string SizeText(long long width, long long height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
 // Orders names as people number files: runs of digits compare by value
 // ("frame_2" < "frame_10"), the rest byte by byte; equal values with
 // different zero padding ("7" and "007") fall back to byte order. The

@@ -5,6 +5,7 @@
 
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/strings.h"
 #include "src/datasets/dycheck_dataset.h"
 #include "src/datasets/kubric_dataset.h"
 #include "src/datasets/nvidia_dataset.h"
@@ -34,8 +35,7 @@ Json SplitInfo(const std::vector<DatasetFrame>& frames) {
   int rgb = 0, depth = 0, covisible = 0;
   for (const DatasetFrame& f : frames) {
     ++per_camera[f.camera_id];
-    ++sizes[std::to_string(f.camera.camera.width) + "x" +
-            std::to_string(f.camera.camera.height)];
+    ++sizes[SizeText(f.camera.camera.width, f.camera.camera.height)];
     rgb += fs::exists(f.rgb) ? 1 : 0;
     depth += f.depth.empty() ? 0 : 1;
     covisible += f.covisible.empty() ? 0 : 1;
@@ -87,7 +87,7 @@ std::string SplitDescription(const Dataset& dataset) {
     const Camera& c = (dataset.val.empty() ? dataset.train : dataset.val)
                           .front()
                           .camera.camera;
-    size = std::to_string(c.width) + "x" + std::to_string(c.height) + " ";
+    size = SizeText(c.width, c.height) + " ";
   }
   return split("train", dataset.train) + "; " + split("val", dataset.val) +
          "; " + size + "(factor " + std::to_string(dataset.factor) + ")";

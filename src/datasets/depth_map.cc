@@ -9,6 +9,7 @@
 #include "src/core/error.h"
 #include "src/core/log.h"
 #include "src/core/npy.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -65,8 +66,7 @@ cv::Mat ReadDepth(const DatasetFrame& frame) {
   cv::Mat depth = ReadDepthMap(frame.depth);
   const Camera& c = frame.camera.camera;
   if (depth.cols != c.width || depth.rows != c.height) {
-    throw Error(frame.depth.string(), "size",
-                std::to_string(depth.cols) + "x" + std::to_string(depth.rows),
+    throw Error(frame.depth.string(), "size", SizeText(depth.cols, depth.rows),
                 "differs from its frame's camera");
   }
   if (frame.depth_convention == DepthConvention::kRayDistance)

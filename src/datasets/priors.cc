@@ -43,8 +43,9 @@ struct KnownLayout {
 // Of each kind, the preferred layout first: metric depth needs no affine;
 // flow with the tool's own occlusion masks before flow without.
 const KnownLayout kLayouts[] = {
-    {PriorKind::kDepth, "MoSca <name>_depth/<frame>.npz", "metric depth (key dep, 0 = none)",
-     "*_depth", ".npz", DepthMeaning::kMetricDepth},
+    {PriorKind::kDepth, "MoSca <name>_depth/<frame>.npz",
+     "metric depth (key dep, 0 = none)", "*_depth", ".npz",
+     DepthMeaning::kMetricDepth},
     {PriorKind::kDepth, "Shape of Motion aligned_depth_anything/<frame>.npy",
      "disparity (Depth Anything aligned to metric depth)",
      "aligned_depth_anything", ".npy"},
@@ -72,8 +73,8 @@ const KnownLayout kLayouts[] = {
      "tracks (T, N, 2) or (1, T, N, 2) and visibility (T, N)", "", ".npz"},
     {PriorKind::kMasks, "DynamicNeRF motion_masks/<frame>.png", "255 = moving",
      "motion_masks", ".png"},
-    {PriorKind::kMasks, "Shape of Motion masks/<frame>.png",
-     "foreground > 0", "masks", ".png"},
+    {PriorKind::kMasks, "Shape of Motion masks/<frame>.png", "foreground > 0",
+     "masks", ".png"},
     {PriorKind::kMasks, "MoSca vos_deva/Annotations/<frame>.png",
      "instance colours, black = background", "vos_deva/Annotations", ".png"},
 };
@@ -87,9 +88,10 @@ std::vector<fs::path> FilesIn(const fs::path& dir, const std::string& ext) {
         name.ends_with(ext) && name[0] != '.')
       files.push_back(e.path());
   }
-  std::sort(files.begin(), files.end(), [](const fs::path& a, const fs::path& b) {
-    return NaturalLess(a.filename().string(), b.filename().string());
-  });
+  std::sort(files.begin(), files.end(),
+            [](const fs::path& a, const fs::path& b) {
+              return NaturalLess(a.filename().string(), b.filename().string());
+            });
   return files;
 }
 
@@ -107,18 +109,14 @@ bool HoldsTracks(const fs::path& file) {
 
 std::string FileName(const fs::path& p) { return p.filename().string(); }
 
-std::string SizeText(int w, int h) {
-  return std::to_string(w) + "x" + std::to_string(h);
-}
-
 // The frame each prior file name (without its extension) stands for.
 class FrameKeys {
  public:
   explicit FrameKeys(const std::vector<PriorFrame>& frames) : frames_(frames) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
       for (const std::string& key :
-           {frames[i].image.filename().string(), frames[i].image.stem().string(),
-            frames[i].name}) {
+           {frames[i].image.filename().string(),
+            frames[i].image.stem().string(), frames[i].name}) {
         if (!key.empty()) index_.emplace(key, static_cast<int>(i));
       }
     }
@@ -422,8 +420,8 @@ PriorsFolder ScanPriors(const fs::path& dir) {
     if (where.empty()) {
       for (const fs::path& file : FilesIn(dir, k.extension)) {
         const bool mosca = std::string(k.extension) == "_tap.npz";
-        if (!mosca && (FileName(file).ends_with("_tap.npz") ||
-                       !HoldsTracks(file)))
+        if (!mosca &&
+            (FileName(file).ends_with("_tap.npz") || !HoldsTracks(file)))
           continue;
         found.emplace_back(file, 1);
       }
@@ -469,8 +467,8 @@ PriorsFolder ScanPriors(const fs::path& dir) {
   return folder;
 }
 
-std::optional<DepthPrior> ReadDepthPrior(const PriorsFolder& folder,
-                                         const std::vector<PriorFrame>& frames) {
+std::optional<DepthPrior> ReadDepthPrior(
+    const PriorsFolder& folder, const std::vector<PriorFrame>& frames) {
   const std::vector<const PriorLayout*> layouts = folder.Of(PriorKind::kDepth);
   if (layouts.empty()) return std::nullopt;
   const PriorLayout& layout = *layouts.front();

@@ -8,6 +8,7 @@
 #include <opencv2/photo.hpp>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -32,8 +33,7 @@ cv::Mat InpaintTelea(const cv::Mat& image, const cv::Mat& mask,
                      double max_value, double radius) {
   if (image.depth() != CV_32F || mask.type() != CV_8UC1 ||
       mask.size() != image.size()) {
-    throw Error("inpaint", "image/mask",
-                std::to_string(image.cols) + "x" + std::to_string(image.rows),
+    throw Error("inpaint", "image/mask", SizeText(image.cols, image.rows),
                 "expected a float image and a CV_8UC1 mask of its size");
   }
   if (!(max_value > 0)) {
@@ -54,8 +54,7 @@ cv::Mat InpaintTelea(const cv::Mat& image, const cv::Mat& mask,
 cv::Mat FillDepthFromFarthest(const cv::Mat& depth, const cv::Mat& mask) {
   if (depth.type() != CV_32FC1 || mask.type() != CV_8UC1 ||
       mask.size() != depth.size()) {
-    throw Error("depth fill", "depth/mask",
-                std::to_string(depth.cols) + "x" + std::to_string(depth.rows),
+    throw Error("depth fill", "depth/mask", SizeText(depth.cols, depth.rows),
                 "expected a CV_32FC1 depth map and a CV_8UC1 mask of its size");
   }
   cv::Mat known = depth.clone();

@@ -14,6 +14,7 @@
 #include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/median.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 
 namespace pano4d {
@@ -30,10 +31,6 @@ constexpr int kBlockFrames = 32;
 
 std::string FrameName(std::size_t index) {
   return "frame " + std::to_string(index);
-}
-
-std::string SizeText(cv::Size size) {
-  return std::to_string(size.width) + "x" + std::to_string(size.height);
 }
 
 // Lengths in working pixels, from the options' diagonal fractions.
@@ -75,8 +72,8 @@ void CheckFrames(const std::vector<cv::Mat>& frames) {
                   "expected 8-bit, 16-bit or float with 1, 3 or 4 channels");
     }
     if (f.size() != frames[0].size()) {
-      throw Error(FrameName(i), "size", SizeText(f.size()),
-                  "expected " + SizeText(frames[0].size()) +
+      throw Error(FrameName(i), "size", SizeText(f.cols, f.rows),
+                  "expected " + SizeText(frames[0].cols, frames[0].rows) +
                       " like frame 0 (all frames of a video have one size)");
     }
   }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 #include "src/geometry/pcl_bridge.h"
 
 namespace pano4d {
@@ -16,10 +17,9 @@ PointCloud UnprojectDepth(const cv::Mat& depth, const cv::Mat& rgb,
   const Camera& c = camera.camera;
   if (depth.type() != CV_32FC1 || depth.cols != c.width ||
       depth.rows != c.height) {
-    throw Error("unproject", "depth",
-                std::to_string(depth.cols) + "x" + std::to_string(depth.rows),
+    throw Error("unproject", "depth", SizeText(depth.cols, depth.rows),
                 "expected a CV_32F map of the camera's size " +
-                    std::to_string(c.width) + "x" + std::to_string(c.height));
+                    SizeText(c.width, c.height));
   }
   if (!rgb.empty() && (rgb.type() != CV_32FC3 || rgb.size() != depth.size()))
     throw Error("unproject", "rgb", "",

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -34,8 +35,7 @@ cv::Matx33d Rotation(const Rigid3d& pose) {
 void CheckView(const StereoView& v, const std::string& what) {
   if (v.grey.type() != CV_32F || v.grey.cols != v.camera.camera.width ||
       v.grey.rows != v.camera.camera.height) {
-    throw Error("plane sweep", what,
-                std::to_string(v.grey.cols) + "x" + std::to_string(v.grey.rows),
+    throw Error("plane sweep", what, SizeText(v.grey.cols, v.grey.rows),
                 "expected a CV_32F grey image of its camera's size");
   }
   if (v.camera.camera.HasDistortion()) {

@@ -7,6 +7,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -121,18 +122,19 @@ Tracks2D ChainFlowTracks(const std::vector<cv::Mat>& frames, int reference,
   for (int t = 0; t < times; ++t) {
     if (frames[t].empty()) continue;
     if (frames[t].size() != frames[reference].size()) {
-      throw Error(
-          "frame " + std::to_string(t), "size",
-          std::to_string(frames[t].cols) + "x" + std::to_string(frames[t].rows),
-          "differs from the reference frame's");
+      throw Error("frame " + std::to_string(t), "size",
+                  SizeText(frames[t].cols, frames[t].rows),
+                  "differs from the reference frame's");
     }
     grey[t] = Grey8(frames[t], t);
   }
   // The links of each direction are independent flow computations; they
   // run in parallel, then the chaining is sequential.
   std::vector<FlowLink> links;
-  for (int t = reference; t + 1 < times; ++t) links.push_back({t, t + 1, {}, {}, {}});
-  for (int t = reference; t - 1 >= 0; --t) links.push_back({t, t - 1, {}, {}, {}});
+  for (int t = reference; t + 1 < times; ++t)
+    links.push_back({t, t + 1, {}, {}, {}});
+  for (int t = reference; t - 1 >= 0; --t)
+    links.push_back({t, t - 1, {}, {}, {}});
   cv::parallel_for_(
       cv::Range(0, static_cast<int>(links.size())), [&](const cv::Range& r) {
         cv::Ptr<cv::DISOpticalFlow> dis =

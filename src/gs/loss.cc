@@ -10,6 +10,7 @@
 
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -111,8 +112,7 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
                 std::to_string(rendered.size()) + " and " +
                     std::to_string(target.size()),
                 "expected " + std::to_string(n) + " values (" +
-                    std::to_string(width) + "x" + std::to_string(height) +
-                    "x3)");
+                    SizeText(width, height) + "x3)");
   }
   if (!(ssim_weight >= 0 && ssim_weight <= 1))
     throw Error("photometric loss", "ssim_weight", std::to_string(ssim_weight),

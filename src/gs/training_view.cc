@@ -7,6 +7,7 @@
 #include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/npy.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 
@@ -22,10 +23,9 @@ std::vector<TrainingView> LoadTrainingViews(
     const int w = v.camera.width, h = v.camera.height;
     const Image image = ReadImage(f.rgb);
     if (image.width() != w || image.height() != h) {
-      throw Error(
-          f.rgb.string(), "size",
-          std::to_string(image.width()) + "x" + std::to_string(image.height()),
-          "its camera is " + std::to_string(w) + "x" + std::to_string(h));
+      throw Error(f.rgb.string(), "size",
+                  SizeText(image.width(), image.height()),
+                  "its camera is " + SizeText(w, h));
     }
     const cv::Mat rgb =
         image.mat().isContinuous() ? image.mat() : image.mat().clone();
@@ -43,8 +43,7 @@ std::vector<TrainingView> LoadTrainingViews(
           shape += std::to_string(s);
         }
         throw Error(f.depth.string(), "shape", shape,
-                    "expected " + std::to_string(h) + "x" + std::to_string(w) +
-                        " like the image");
+                    "expected " + SizeText(h, w) + " like the image");
       }
       v.depth = depth.ToFloats();
       for (float& d : v.depth) {
@@ -58,10 +57,9 @@ std::vector<TrainingView> LoadTrainingViews(
     if (!f.dynamic_mask.empty()) {
       const cv::Mat mask = ReadMask(f.dynamic_mask);
       if (mask.cols != w || mask.rows != h) {
-        throw Error(
-            f.dynamic_mask.string(), "size",
-            std::to_string(mask.cols) + "x" + std::to_string(mask.rows),
-            "its camera is " + std::to_string(w) + "x" + std::to_string(h));
+        throw Error(f.dynamic_mask.string(), "size",
+                    SizeText(mask.cols, mask.rows),
+                    "its camera is " + SizeText(w, h));
       }
       v.dynamic.resize(static_cast<std::size_t>(w) * h);
       for (int y = 0; y < h; ++y)

@@ -102,10 +102,9 @@ std::uint64_t SplitMix64(std::uint64_t x) {
 void CheckSize(const std::filesystem::path& path, int width, int height,
                const RasterCamera& camera) {
   if (width != camera.width || height != camera.height) {
-    throw Error(path.string(), "size",
-                std::to_string(width) + "x" + std::to_string(height),
-                "expected " + std::to_string(camera.width) + "x" +
-                    std::to_string(camera.height) + ", the size of its camera");
+    throw Error(path.string(), "size", SizeText(width, height),
+                "expected " + SizeText(camera.width, camera.height) +
+                    ", the size of its camera");
   }
 }
 
@@ -429,10 +428,10 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   std::vector<double> point_depths, focals;
   double hole_sum = 0, holes = 0, prefilled = 0, cracks = 0;
   Json cameras_json = Json::array();
-  ProgressBar bar(StringPrintf("expansion step %d (%g deg)", e,
-                               report.angle_degrees),
-                  static_cast<std::int64_t>(cams.size()), std::cerr,
-                  ProgressBar::Mode::kAuto, kStepProgressAfterSeconds);
+  ProgressBar bar(
+      StringPrintf("expansion step %d (%g deg)", e, report.angle_degrees),
+      static_cast<std::int64_t>(cams.size()), std::cerr,
+      ProgressBar::Mode::kAuto, kStepProgressAfterSeconds);
   for (int m = 0; m < directions; ++m) {
     PriorClip clip;
     clip.name = "step" + ZeroPadded(e, 2) + "_dir" + std::to_string(m);

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -13,12 +14,11 @@ namespace {
 void CheckSize(const cv::Mat& m, int type, const RasterCamera& camera,
                const char* field) {
   if (m.type() != type || m.cols != camera.width || m.rows != camera.height) {
-    throw Error("seen depth", field,
-                std::to_string(m.cols) + "x" + std::to_string(m.rows),
+    throw Error("seen depth", field, SizeText(m.cols, m.rows),
                 std::string("expected one ") +
                     (type == CV_32FC1 ? "float" : "byte") +
-                    " per pixel of its " + std::to_string(camera.width) + "x" +
-                    std::to_string(camera.height) + " camera");
+                    " per pixel of its " +
+                    SizeText(camera.width, camera.height) + " camera");
   }
 }
 

@@ -38,12 +38,6 @@ constexpr double kInpaintRadius = 3.0;
 // so that a later refinement pulls it either way equally.
 constexpr float kUnknownGrey = 0.5f;
 
-std::string SizeText(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
-
-std::string SizeText(const cv::Mat& m) { return SizeText(m.cols, m.rows); }
-
 // Checks that `mats[i]` is a `type` matrix of `sizes[i]`'s size (the counts
 // are checked already).
 void CheckPerFrame(const std::string& clip, const std::string& field,
@@ -55,7 +49,7 @@ void CheckPerFrame(const std::string& clip, const std::string& field,
     if (m.type() != type || m.cols != sizes[i].width ||
         m.rows != sizes[i].height) {
       throw Error("prior clip " + clip, field + "[" + std::to_string(i) + "]",
-                  SizeText(m),
+                  SizeText(m.cols, m.rows),
                   std::string("expected ") + type_name +
                       " of its camera's size " +
                       SizeText(sizes[i].width, sizes[i].height));
@@ -232,9 +226,9 @@ void WriteCommandInput(const PriorClip& clip, const fs::path& in) {
 // when it exited 0.
 std::string RunShell(const std::string& line, const fs::path& log,
                      double timeout_seconds) {
-  const ProcessResult r = RunProcess({"/bin/sh", "-c", line}, log,
-                                     {.timeout_seconds = timeout_seconds,
-                                      .own_group = true});
+  const ProcessResult r =
+      RunProcess({"/bin/sh", "-c", line}, log,
+                 {.timeout_seconds = timeout_seconds, .own_group = true});
   if (r.ok()) return "";
   return ProcessFailure(r, log) + (r.timed_out ? " (--prior-timeout)" : "");
 }
@@ -283,9 +277,9 @@ std::string ReadCommandOutput(const PriorClip& clip, const fs::path& dir,
     }
     const std::string expected =
         SizeText(clip.cameras[i].width, clip.cameras[i].height);
-    if (SizeText(image.mat()) != expected) {
-      return "frame " + path.string() + " is " + SizeText(image.mat()) +
-             ", expected " + expected;
+    if (SizeText(image.width(), image.height()) != expected) {
+      return "frame " + path.string() + " is " +
+             SizeText(image.width(), image.height()) + ", expected " + expected;
     }
     if (!InUnitRange(image.mat())) {
       return "frame " + path.string() + " has values outside [0, 1]";
@@ -431,14 +425,14 @@ PriorResult CommandPrior::Fill(const PriorClip& clip) {
 cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,
                   const cv::Mat& mask) {
   if (filled.type() != warped.type() || filled.size() != warped.size()) {
-    throw Error(
-        "composite", "filled", SizeText(filled),
-        "expected the warped frame's size and type, " + SizeText(warped));
+    throw Error("composite", "filled", SizeText(filled.cols, filled.rows),
+                "expected the warped frame's size and type, " +
+                    SizeText(warped.cols, warped.rows));
   }
   if (mask.type() != CV_8UC1 || mask.size() != warped.size()) {
-    throw Error("composite", "mask", SizeText(mask),
+    throw Error("composite", "mask", SizeText(mask.cols, mask.rows),
                 "expected a CV_8UC1 mask of the warped frame's size " +
-                    SizeText(warped));
+                    SizeText(warped.cols, warped.rows));
   }
   cv::Mat out = warped.clone();
   filled.copyTo(out, mask);
@@ -449,9 +443,8 @@ std::unique_ptr<Prior> MakePrior(const std::string& command,
                                  const std::filesystem::path& work_dir,
                                  double timeout_seconds) {
   if (command.empty()) return std::make_unique<GeometryPrior>();
-  return std::make_unique<CommandPrior>(command, work_dir,
-                                        std::make_unique<GeometryPrior>(),
-                                        timeout_seconds);
+  return std::make_unique<CommandPrior>(
+      command, work_dir, std::make_unique<GeometryPrior>(), timeout_seconds);
 }
 
 }  // namespace pano4d

@@ -12,6 +12,7 @@
 
 #include "src/core/error.h"
 #include "src/core/image.h"
+#include "src/core/strings.h"
 
 namespace pano4d {
 namespace {
@@ -26,11 +27,8 @@ constexpr double kMaxCoordinate = 1e7;
 
 void CheckInput(const cv::Mat& rgb, const cv::Mat& depth,
                 const RasterCamera& source, const cv::Mat& valid) {
-  const auto size = [](const cv::Mat& m) {
-    return std::to_string(m.cols) + "x" + std::to_string(m.rows);
-  };
-  const std::string expected =
-      std::to_string(source.width) + "x" + std::to_string(source.height);
+  const auto size = [](const cv::Mat& m) { return SizeText(m.cols, m.rows); };
+  const std::string expected = SizeText(source.width, source.height);
   if (rgb.type() != CV_32FC3 || rgb.cols != source.width ||
       rgb.rows != source.height) {
     throw Error(
@@ -421,7 +419,7 @@ WarpResult ForwardWarp(const cv::Mat& rgb, const cv::Mat& depth,
   CheckInput(rgb, depth, source, valid);
   const int tw = target.width, th = target.height;
   if (tw <= 0 || th <= 0) {
-    throw Error("warp", "target", std::to_string(tw) + "x" + std::to_string(th),
+    throw Error("warp", "target", SizeText(tw, th),
                 "the target camera has no pixels");
   }
   const cv::Mat colour_mat = rgb.isContinuous() ? rgb : rgb.clone();
@@ -463,12 +461,10 @@ WarpResult ForwardWarp(const cv::Mat& rgb, const cv::Mat& depth,
 
 int FillHoles(const WarpResult& from, WarpResult* into) {
   if (from.mask.size() != into->mask.size()) {
-    throw Error(
-        "warp", "chained frame",
-        std::to_string(from.mask.cols) + "x" + std::to_string(from.mask.rows),
-        "expected the size of the frame it fills, " +
-            std::to_string(into->mask.cols) + "x" +
-            std::to_string(into->mask.rows));
+    throw Error("warp", "chained frame",
+                SizeText(from.mask.cols, from.mask.rows),
+                "expected the size of the frame it fills, " +
+                    SizeText(into->mask.cols, into->mask.rows));
   }
   int filled = 0;
   for (int y = 0; y < into->mask.rows; ++y) {

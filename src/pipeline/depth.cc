@@ -32,11 +32,9 @@ namespace {
 void CheckSize(const cv::Mat& image, const fs::path& file,
                const Camera& camera) {
   if (image.cols == camera.width && image.rows == camera.height) return;
-  throw Error(file.string(), "size",
-              std::to_string(image.cols) + "x" + std::to_string(image.rows),
+  throw Error(file.string(), "size", SizeText(image.cols, image.rows),
               "differs from its frame's camera (" +
-                  std::to_string(camera.width) + "x" +
-                  std::to_string(camera.height) + ")");
+                  SizeText(camera.width, camera.height) + ")");
 }
 
 // Dynamic masks for frames that have none on disk: flow and epipolar
@@ -46,8 +44,8 @@ void ComputeMissingMasks(const fs::path& dir,
   std::map<std::string, std::vector<WorkspaceFrame*>> by_camera;
   for (WorkspaceFrame& f : *frames) {
     if (!f.dynamic_mask.empty()) continue;
-    const std::string key = std::to_string(f.camera.camera.width) + "x" +
-                            std::to_string(f.camera.camera.height);
+    const std::string key =
+        SizeText(f.camera.camera.width, f.camera.camera.height);
     by_camera[key].push_back(&f);
   }
   for (auto& [key, list] : by_camera) {
@@ -187,13 +185,10 @@ std::vector<DepthSample> SfmSamples(const ColmapModel& model,
         (camera->width != static_cast<std::uint64_t>(f.camera.camera.width) ||
          camera->height !=
              static_cast<std::uint64_t>(f.camera.camera.height))) {
-      throw Error(
-          image.name, "size",
-          std::to_string(camera->width) + "x" + std::to_string(camera->height),
-          "the SfM model's image differs from the frame (" +
-              std::to_string(f.camera.camera.width) + "x" +
-              std::to_string(f.camera.camera.height) +
-              "); run `pano4d sfm --dataset` at the same --factor");
+      throw Error(image.name, "size", SizeText(camera->width, camera->height),
+                  "the SfM model's image differs from the frame (" +
+                      SizeText(f.camera.camera.width, f.camera.camera.height) +
+                      "); run `pano4d sfm --dataset` at the same --factor");
     }
     for (const ColmapPoint2D& p : image.points2D) {
       if (!p.HasPoint3D()) continue;
@@ -228,11 +223,9 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
       const double a = static_cast<double>(depth.cols) / depth.rows;
       if (std::abs(a / (static_cast<double>(w) / h) - 1.0) >
           kMaxAspectDifference) {
-        throw Error(files[i].string(), "size",
-                    std::to_string(depth.cols) + "x" +
-                        std::to_string(depth.rows),
+        throw Error(files[i].string(), "size", SizeText(depth.cols, depth.rows),
                     "another aspect ratio than its frame " + f.name + " (" +
-                        std::to_string(w) + "x" + std::to_string(h) +
+                        SizeText(w, h) +
                         "): another frame's map, or width and height swapped");
       }
       cv::Mat resized;

@@ -15,6 +15,7 @@
 #include "src/core/progress.h"
 #include "src/core/run_recorder.h"
 #include "src/core/stop_signal.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory_io.h"
@@ -59,10 +60,9 @@ std::vector<ValidationView> LoadValidation(
     v.camera = RasterCamera::FromPosed(f.camera);
     v.rgb = ReadImage(f.rgb);
     if (v.rgb.width() != v.camera.width || v.rgb.height() != v.camera.height) {
-      throw Error(
-          f.rgb.string(), "size",
-          std::to_string(v.rgb.width()) + "x" + std::to_string(v.rgb.height()),
-          "differs from its camera");
+      throw Error(f.rgb.string(), "size",
+                  SizeText(v.rgb.width(), v.rgb.height()),
+                  "differs from its camera");
     }
     if (!f.covisible.empty()) v.covisible = ReadMask(f.covisible);
     views.push_back(std::move(v));

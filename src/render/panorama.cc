@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 #include "src/render/sh.h"
 
 namespace pano4d {
@@ -60,8 +61,7 @@ void Splat(const EquirectProjection& proj,
 
 PanoramaImage Blank(const EquirectProjection& proj) {
   if (proj.width <= 0 || proj.height <= 0) {
-    throw Error("panorama", "size",
-                std::to_string(proj.width) + "x" + std::to_string(proj.height),
+    throw Error("panorama", "size", SizeText(proj.width, proj.height),
                 "must be positive");
   }
   PanoramaImage image;

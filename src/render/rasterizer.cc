@@ -6,6 +6,7 @@
 #include <string>
 
 #include "src/core/error.h"
+#include "src/core/strings.h"
 #include "src/core/timer.h"
 #include "src/render/projection.h"
 #include "src/render/rasterize_to_pixels.h"
@@ -14,9 +15,7 @@
 namespace pano4d {
 namespace {
 
-std::string Size(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
+std::string Size(int width, int height) { return SizeText(width, height); }
 
 template <typename T>
 void CheckCamera(const RasterCameraT<T>& camera) {
