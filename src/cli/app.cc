@@ -9,6 +9,7 @@
 #include <omp.h>
 #include <CLI/CLI.hpp>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 #include "src/core/log.h"
 #include "src/core/stop_signal.h"
@@ -104,6 +105,9 @@ int Main(int argc, char** argv) {
     return action();
   } catch (const Error& e) {
     std::cerr << "pano4d: error: " << e.what() << "\n";
+  } catch (const InternalError& e) {
+    std::cerr << "pano4d: internal error: " << e.what() << "\n";
+    return kExitBug;
   } catch (const std::exception& e) {
     std::cerr << "pano4d: error: " << e.what() << "\n";
   }

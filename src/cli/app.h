@@ -16,6 +16,7 @@ enum ExitCode : int {
   kExitOk = 0,
   kExitError = 1,   // bad input, a failed step: the message names the input
   kExitUsage = 64,  // unknown flag, missing argument (sysexits' EX_USAGE)
+  kExitBug = 70,    // a failed PANO4D_CHECK (core/check.h; EX_SOFTWARE)
   // Stopped on request (stop_signal.h) with its state saved: run the same
   // command again (sysexits' EX_TEMPFAIL).
   kExitStopped = kStoppedExitStatus,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 
 namespace pano4d {
@@ -29,16 +30,14 @@ Adam::Adam(AdamOptions options) : options_(options) { options_.Check(); }
 
 int Adam::AddGroup(std::string name, std::vector<float>* params, int width,
                    double lr) {
-  if (params == nullptr || width <= 0 || params->size() % width != 0) {
-    throw Error(
-        "adam", name, std::to_string(params ? params->size() : 0),
-        "parameters must be rows of " + std::to_string(width) + " floats");
-  }
+  PANO4D_CHECK(params != nullptr && width > 0 && params->size() % width == 0,
+               "Adam group " + name + ": " +
+                   std::to_string(params ? params->size() : 0) +
+                   " parameters are not rows of " + std::to_string(width));
   const std::int64_t rows = static_cast<std::int64_t>(params->size()) / width;
-  if (!groups_.empty() && rows != rows_) {
-    throw Error("adam", name, std::to_string(rows) + " rows",
-                "the other groups have " + std::to_string(rows_));
-  }
+  PANO4D_CHECK(groups_.empty() || rows == rows_,
+               "Adam group " + name + " has " + std::to_string(rows) +
+                   " rows, the other groups " + std::to_string(rows_));
   rows_ = rows;
   groups_.push_back({std::move(name), params, width, lr,
                      std::vector<float>(params->size(), 0.0f),
@@ -51,10 +50,10 @@ void Adam::RestoreRows() {
   rows_ =
       static_cast<std::int64_t>(groups_[0].params->size()) / groups_[0].width;
   for (const Group& g : groups_) {
-    if (g.v.size() != g.params->size()) {
-      throw Error("adam", g.name, std::to_string(g.v.size()),
-                  "second moment does not match the parameters");
-    }
+    PANO4D_CHECK(g.v.size() == g.params->size(),
+                 "Adam group " + g.name + ": " + std::to_string(g.v.size()) +
+                     " second moments for " +
+                     std::to_string(g.params->size()) + " parameters");
   }
   CheckSizes();
 }
@@ -63,22 +62,21 @@ void Adam::SetLearningRate(int group, double lr) { groups_.at(group).lr = lr; }
 
 void Adam::CheckSizes() const {
   for (const Group& g : groups_) {
-    if (static_cast<std::int64_t>(g.params->size()) != rows_ * g.width ||
-        g.m.size() != g.params->size()) {
-      throw Error("adam", g.name, std::to_string(g.params->size()),
-                  "parameters changed size without AppendRows/KeepRows (" +
-                      std::to_string(rows_) + " rows expected)");
-    }
+    PANO4D_CHECK(
+        static_cast<std::int64_t>(g.params->size()) == rows_ * g.width &&
+            g.m.size() == g.params->size(),
+        "Adam group " + g.name + ": " + std::to_string(g.params->size()) +
+            " parameters changed size without AppendRows/KeepRows (" +
+            std::to_string(rows_) + " rows expected)");
   }
 }
 
 AdamStepStats Adam::Step(
     const std::vector<const std::vector<float>*>& gradients) {
-  if (gradients.size() != groups_.size()) {
-    throw Error(
-        "adam", "gradients", std::to_string(gradients.size()),
-        "expected one per group (" + std::to_string(groups_.size()) + ")");
-  }
+  PANO4D_CHECK(gradients.size() == groups_.size(),
+               "Adam::Step got " + std::to_string(gradients.size()) +
+                   " gradients for " + std::to_string(groups_.size()) +
+                   " groups");
   CheckSizes();
   ++step_;
   const double b1 = options_.beta1, b2 = options_.beta2;
@@ -86,12 +84,12 @@ AdamStepStats Adam::Step(
   const double correction2 = 1 - std::pow(b2, static_cast<double>(step_));
   for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
     const std::vector<float>* grad = gradients[gi];
-    if (grad != nullptr && !grad->empty() &&
-        grad->size() != groups_[gi].params->size()) {
-      throw Error(
-          "adam", groups_[gi].name + " gradient", std::to_string(grad->size()),
-          "expected " + std::to_string(groups_[gi].params->size()) + " values");
-    }
+    PANO4D_CHECK(grad == nullptr || grad->empty() ||
+                     grad->size() == groups_[gi].params->size(),
+                 "Adam group " + groups_[gi].name + ": a gradient of " +
+                     std::to_string(grad ? grad->size() : 0) + " values for " +
+                     std::to_string(groups_[gi].params->size()) +
+                     " parameters");
   }
   const double root_correction2 = std::sqrt(correction2);
   std::int64_t skipped = 0;
@@ -147,10 +145,9 @@ void Adam::AppendRows(std::int64_t count) {
 }
 
 void Adam::KeepRows(const std::vector<std::uint8_t>& keep) {
-  if (static_cast<std::int64_t>(keep.size()) != rows_) {
-    throw Error("adam", "keep", std::to_string(keep.size()),
-                "expected one flag per row (" + std::to_string(rows_) + ")");
-  }
+  PANO4D_CHECK(static_cast<std::int64_t>(keep.size()) == rows_,
+               "Adam::KeepRows got " + std::to_string(keep.size()) +
+                   " flags for " + std::to_string(rows_) + " rows");
   const std::int64_t kept =
       std::count_if(keep.begin(), keep.end(), [](std::uint8_t k) { return k; });
   for (Group& g : groups_) {

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 #include "src/render/ewa.h"
 #include "src/render/quaternion.h"
@@ -154,14 +155,11 @@ void ProjectionBackward(const GaussianModelT<T>& model,
   using Mat23 = Eigen::Matrix<T, 2, 3>;
   // The forward's results are indexed by Gaussian: another model (a larger
   // one would be read past the end) or other 2D gradients are refused.
-  if (model.size() != p.radius.size() || g2d.x.size() != p.radius.size()) {
-    throw Error("rasterizer", "projection backward",
-                std::to_string(model.size()) + " Gaussians, 2D gradients of " +
-                    std::to_string(g2d.x.size()),
-                "the forward projected " + std::to_string(p.radius.size()) +
-                    ": pass the model of that forward and its rasterization "
-                    "backward's gradients");
-  }
+  PANO4D_CHECK(
+      model.size() == p.radius.size() && g2d.x.size() == p.radius.size(),
+      "the projection's backward got " + std::to_string(model.size()) +
+          " Gaussians and 2D gradients of " + std::to_string(g2d.x.size()) +
+          " for a forward that projected " + std::to_string(p.radius.size()));
   grad->Assign(model);
   const int k_count = model.sh_coefficients();
   const FovLimits<T> lim(camera);

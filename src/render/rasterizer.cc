@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <string>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
@@ -15,12 +16,10 @@
 namespace pano4d {
 namespace {
 
-std::string Size(int width, int height) { return SizeText(width, height); }
-
 template <typename T>
 void CheckCamera(const RasterCameraT<T>& camera) {
   if (camera.width <= 0 || camera.height <= 0) {
-    throw Error("rasterizer", "camera", Size(camera.width, camera.height),
+    throw Error("rasterizer", "camera", SizeText(camera.width, camera.height),
                 "image size must be positive");
   }
 }
@@ -34,29 +33,25 @@ void CheckBackwardInputs(const RasterCameraT<T>& camera,
                          const RenderGradientsT<T>& d_out) {
   const std::size_t pixels =
       static_cast<std::size_t>(camera.width) * camera.height;
-  if (state.width != camera.width || state.height != camera.height ||
-      state.final_transmittance.size() != pixels ||
-      state.last_contributor.size() != pixels) {
-    throw Error("rasterizer", "backward state",
-                Size(state.width, state.height) + " image",
-                "the camera is " + Size(camera.width, camera.height) +
-                    ": pass the state of this camera's forward");
-  }
-  if (out.width != camera.width || out.height != camera.height ||
-      out.depth.size() != pixels) {
-    throw Error("rasterizer", "backward output",
-                Size(out.width, out.height) + " image",
-                "the camera is " + Size(camera.width, camera.height) +
-                    ": pass the output of this camera's forward");
-  }
+  PANO4D_CHECK(state.width == camera.width && state.height == camera.height &&
+                   state.final_transmittance.size() == pixels &&
+                   state.last_contributor.size() == pixels,
+               "the rasterizer's backward got the state of a " +
+                   SizeText(state.width, state.height) + " forward for a " +
+                   SizeText(camera.width, camera.height) + " camera");
+  PANO4D_CHECK(out.width == camera.width && out.height == camera.height &&
+                   out.depth.size() == pixels,
+               "the rasterizer's backward got the output of a " +
+                   SizeText(out.width, out.height) + " forward for a " +
+                   SizeText(camera.width, camera.height) + " camera");
   const auto check = [&](const std::vector<T>& d, std::size_t per,
                          const char* name) {
-    if (!d.empty() && d.size() != per * pixels) {
-      throw Error("rasterizer", std::string("gradient of ") + name,
-                  std::to_string(d.size()) + " values",
-                  "expected " + std::to_string(per * pixels) + " for the " +
-                      Size(camera.width, camera.height) + " image, or none");
-    }
+    PANO4D_CHECK(d.empty() || d.size() == per * pixels,
+                 std::string("the rasterizer's backward got ") +
+                     std::to_string(d.size()) + " values of the gradient of " +
+                     name + ", not " + std::to_string(per * pixels) +
+                     " for a " + SizeText(camera.width, camera.height) +
+                     " image, or none");
   };
   check(d_out.rgb, 3, "rgb");
   check(d_out.depth, 1, "depth");
@@ -104,13 +99,11 @@ RasterBackwardStats RasterizerT<T>::Backward(const GaussianModelT<T>& model,
                                              const RenderOutputT<T>& out,
                                              const RenderGradientsT<T>& d_out,
                                              GaussianGradientsT<T>* grad) {
-  if (model.size() != state.gaussians()) {
-    throw Error("rasterizer", "backward",
-                std::to_string(model.size()) + " Gaussians",
-                "the state is of a forward that projected " +
-                    std::to_string(state.gaussians()) +
-                    ": pass the model of that forward");
-  }
+  PANO4D_CHECK(model.size() == state.gaussians(),
+               "the rasterizer's backward got " +
+                   std::to_string(model.size()) +
+                   " Gaussians for a forward that projected " +
+                   std::to_string(state.gaussians()));
   RasterBackwardStats stats;
   Timer timer;
   RasterizeBackward(camera, settings, state, out, d_out, &grad2d_);

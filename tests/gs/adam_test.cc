@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 
 namespace pano4d {
@@ -91,18 +92,19 @@ TEST(AdamTest, MomentsFollowAppendedAndRemovedRows) {
   adam.KeepRows({0, 1, 1});
   EXPECT_EQ(adam.rows(), 2);
   EXPECT_EQ(adam.first_moment(1)[0], m_row1);
-  // A group resized behind the optimiser's back is an error, not a crash.
+  // A group resized behind the optimiser's back is a bug in pano4d, caught
+  // as such, not a crash.
   means.push_back(1);
-  EXPECT_THROW(adam.Step({&gm, &go}), Error);
+  EXPECT_THROW(adam.Step({&gm, &go}), InternalError);
 }
 
 TEST(AdamTest, GroupsMustAgreeOnRows) {
   std::vector<float> a(6), b(4);
   Adam adam;
   adam.AddGroup("a", &a, 3, 0.1);
-  EXPECT_THROW(adam.AddGroup("b", &b, 1, 0.1), Error);
+  EXPECT_THROW(adam.AddGroup("b", &b, 1, 0.1), InternalError);
   std::vector<float> c(5);
-  EXPECT_THROW(adam.AddGroup("c", &c, 3, 0.1), Error);
+  EXPECT_THROW(adam.AddGroup("c", &c, 3, 0.1), InternalError);
   EXPECT_THROW(Adam({.epsilon = 0}), Error);
 }
 
