@@ -21,15 +21,15 @@ class InternalError : public std::logic_error {
 };
 
 namespace internal {
-[[noreturn]] void CheckFailed(const char* condition, const char* file,
-                              int line, const std::string& message);
+[[noreturn]] void CheckFailed(const char* condition, const char* file, int line,
+                              const std::string& message);
 }  // namespace internal
 
 }  // namespace pano4d
 
-#define PANO4D_CHECK(condition, message)                                  \
-  do {                                                                    \
-    if (!(condition))                                                     \
-      ::pano4d::internal::CheckFailed(#condition, __FILE__, __LINE__,     \
-                                      (message));                         \
+#define PANO4D_CHECK(condition, message)                              \
+  do {                                                                \
+    if (!(condition))                                                 \
+      ::pano4d::internal::CheckFailed(#condition, __FILE__, __LINE__, \
+                                      (message));                     \
   } while (0)

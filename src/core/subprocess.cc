@@ -314,7 +314,8 @@ std::string ProcessFailure(const ProcessResult& result, const fs::path& log) {
       why = line;
   }
   if (why.empty()) why = last;
-  if (why.size() > kQuotedLogChars) why = why.substr(0, kQuotedLogChars) + "...";
+  if (why.size() > kQuotedLogChars)
+    why = why.substr(0, kQuotedLogChars) + "...";
   std::string text = result.How();
   if (!why.empty()) text += ": \"" + why + "\"";
   return text + " (log: " + log.string() + ")";

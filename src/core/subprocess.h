@@ -19,9 +19,9 @@ std::optional<std::filesystem::path> FindOnPath(const std::string& name);
 
 // How a child process ended.
 struct ProcessResult {
-  int exit_code = -1;      // -1 when killed by a signal
-  int signal = 0;          // the signal that killed it, or 0
-  bool timed_out = false;  // stopped at ProcessOptions::timeout_seconds
+  int exit_code = -1;       // -1 when killed by a signal
+  int signal = 0;           // the signal that killed it, or 0
+  bool timed_out = false;   // stopped at ProcessOptions::timeout_seconds
   double time_limit_s = 0;  // that limit, when timed_out
   double seconds = 0.0;
   // Peak resident memory of the child or its largest waited-for descendant

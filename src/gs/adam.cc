@@ -52,8 +52,8 @@ void Adam::RestoreRows() {
   for (const Group& g : groups_) {
     PANO4D_CHECK(g.v.size() == g.params->size(),
                  "Adam group " + g.name + ": " + std::to_string(g.v.size()) +
-                     " second moments for " +
-                     std::to_string(g.params->size()) + " parameters");
+                     " second moments for " + std::to_string(g.params->size()) +
+                     " parameters");
   }
   CheckSizes();
 }

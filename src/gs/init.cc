@@ -15,6 +15,7 @@
 #include "src/core/image.h"
 #include "src/core/log.h"
 #include "src/core/median.h"
+#include "src/core/option_checks.h"
 #include "src/geometry/inpaint.h"
 #include "src/render/sh.h"
 
@@ -196,22 +197,14 @@ GaussianModel GaussiansFromCloud(const PointCloud& cloud, double voxel,
 
 void InitOptions::Check() const {
   const auto positive = [](double v, const char* name) {
-    if (!(v > 0)) {
-      throw Error("init options", name, std::to_string(v), "must be positive");
-    }
+    CheckPositive(v, "init options", name);
   };
   positive(pixel_stride, "pixel_stride");
   positive(voxel_pixels, "voxel_pixels");
   positive(static_cast<double>(max_static), "max_static");
   positive(static_cast<double>(max_dynamic), "max_dynamic");
-  if (num_bases < 0) {
-    throw Error("init options", "num_bases", std::to_string(num_bases),
-                "must be zero or positive");
-  }
-  if (!(dynamic_thickness >= 0)) {
-    throw Error("init options", "dynamic_thickness",
-                std::to_string(dynamic_thickness), "must be zero or positive");
-  }
+  CheckNonNegative(num_bases, "init options", "num_bases");
+  CheckNonNegative(dynamic_thickness, "init options", "dynamic_thickness");
   positive(dynamic_layers, "dynamic_layers");
   if (dynamic_layers > kMaxDynamicLayers) {
     throw Error("init options", "dynamic_layers",

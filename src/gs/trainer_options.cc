@@ -5,20 +5,16 @@
 #include <utility>
 
 #include "src/core/error.h"
+#include "src/core/option_checks.h"
 
 namespace pano4d {
 
 void TrainerOptions::Check() const {
   const auto positive = [](double v, const char* name) {
-    if (!(v > 0) || !std::isfinite(v)) {
-      throw Error("fit options", name, std::to_string(v), "must be positive");
-    }
+    CheckPositive(v, "fit options", name);
   };
   const auto non_negative = [](double v, const char* name) {
-    if (!(v >= 0) || !std::isfinite(v)) {
-      throw Error("fit options", name, std::to_string(v),
-                  "must be zero or positive");
-    }
+    CheckNonNegative(v, "fit options", name);
   };
   const auto weight = [&](double v, const char* name) {
     non_negative(v, name);

@@ -17,6 +17,7 @@
 #include "src/core/median.h"
 #include "src/core/memory.h"
 #include "src/core/npy.h"
+#include "src/core/option_checks.h"
 #include "src/core/progress.h"
 #include "src/core/strings.h"
 #include "src/geometry/inpaint.h"
@@ -186,10 +187,7 @@ void KeepMovingIfEveryFrameHasIt(PriorClip* clip) {
 void ExpansionOptions::Check() const {
   geometry.Check();
   const auto positive = [](double v, const char* name) {
-    if (!(v > 0)) {
-      throw Error("expansion options", name, std::to_string(v),
-                  "must be positive");
-    }
+    CheckPositive(v, "expansion options", name);
   };
   positive(every, "every");
   positive(refine_every, "refine_every");
@@ -200,10 +198,7 @@ void ExpansionOptions::Check() const {
     throw Error("expansion options", "carve_every", std::to_string(carve_every),
                 "must be zero (only at the steps) or positive");
   }
-  if (!(refine_weight >= 0)) {
-    throw Error("expansion options", "refine_weight",
-                std::to_string(refine_weight), "must be zero or positive");
-  }
+  CheckNonNegative(refine_weight, "expansion options", "refine_weight");
   if (!(refine_outside_weight >= 0)) {
     throw Error("expansion options", "refine_outside_weight",
                 std::to_string(refine_outside_weight),

@@ -100,8 +100,7 @@ RasterBackwardStats RasterizerT<T>::Backward(const GaussianModelT<T>& model,
                                              const RenderGradientsT<T>& d_out,
                                              GaussianGradientsT<T>* grad) {
   PANO4D_CHECK(model.size() == state.gaussians(),
-               "the rasterizer's backward got " +
-                   std::to_string(model.size()) +
+               "the rasterizer's backward got " + std::to_string(model.size()) +
                    " Gaussians for a forward that projected " +
                    std::to_string(state.gaussians()));
   RasterBackwardStats stats;

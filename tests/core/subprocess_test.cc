@@ -42,8 +42,8 @@ TEST(ProcessFailureTest, NamesHowTheLineThatSaysWhyAndTheLog) {
                 (dir / "silent.log").string() + ")");
 
   r = Shell("kill -9 $$", dir / "killed.log");
-  EXPECT_EQ(ProcessFailure(r, dir / "killed.log").rfind("killed by signal 9", 0),
-            0u);
+  EXPECT_EQ(
+      ProcessFailure(r, dir / "killed.log").rfind("killed by signal 9", 0), 0u);
 
   r = Shell("sleep 30", dir / "slow.log", /*timeout_s=*/0.2);
   EXPECT_TRUE(r.timed_out);
