@@ -12,7 +12,7 @@
 #include "src/core/frames.h"
 #include "src/core/json.h"
 #include "src/core/workspace_lock.h"
-#include "src/gs/trainer.h"
+#include "src/gs/training_view.h"
 #include "src/pano/pairs.h"
 
 namespace pano4d::cli {

@@ -9,7 +9,7 @@
 #include "src/geometry/point_cloud.h"
 #include "src/geometry/tracks.h"
 #include "src/gs/scene.h"
-#include "src/gs/trainer.h"
+#include "src/gs/training_view.h"
 
 namespace pano4d {
 
@@ -48,7 +48,7 @@ struct InitOptions {
   // Measured in docs/experiments/2026-11-24-moving-objects-volume.md.
   double dynamic_thickness = 1.0;
   int dynamic_layers = 2;  // at most kMaxDynamicLayers
-  int track_stride = 3;  // seeds: every stride-th dynamic pixel
+  int track_stride = 3;    // seeds: every stride-th dynamic pixel
   TrackOptions tracks;
   // Fewer valid tracks than this in a cluster at a time: that time's pose
   // is taken from the nearest time that has enough.

@@ -12,6 +12,7 @@
 
 #include "src/gs/adam.h"
 #include "src/gs/appearance.h"
+#include "src/gs/checkpoint.h"
 #include "src/gs/loss.h"
 #include "src/gs/scene.h"
 #include "src/gs/scene_editor.h"
@@ -38,32 +39,6 @@ struct PhaseTimes {
   double compose = 0, forward = 0, loss = 0, backward = 0, motion = 0,
          optimise = 0, densify = 0;
 };
-
-// The scene stored in a checkpoint (to construct the Trainer that
-// LoadCheckpoint then restores). Throws pano4d::Error naming the file when
-// it is not a pano4d checkpoint, is truncated or holds non-finite values.
-// The byte overloads read a checkpoint in memory (`source` names it in
-// errors); the path overloads read the file.
-GaussianScene ReadCheckpointScene(const std::filesystem::path& path);
-GaussianScene ReadCheckpointScene(std::vector<std::uint8_t> bytes,
-                                  const std::string& source);
-// The fingerprint a checkpoint was written with (Trainer::SetFingerprint);
-// null for a checkpoint from before pano4d stored one.
-nlohmann::json ReadCheckpointFingerprint(const std::filesystem::path& path);
-nlohmann::json ReadCheckpointFingerprint(std::vector<std::uint8_t> bytes,
-                                         const std::string& source);
-// Both fingerprints from one read of the file: the options' (as above) and
-// the scene's (ViewsFingerprint; empty before pano4d stored one).
-struct CheckpointFingerprints {
-  nlohmann::json options;
-  std::string scene;
-};
-CheckpointFingerprints ReadCheckpointFingerprints(
-    const std::filesystem::path& path);
-
-// The scene the views show, as a checkpoint records it: a hash of their
-// names, times, cameras, images, depth and dynamic masks.
-std::string ViewsFingerprint(const std::vector<TrainingView>& views);
 
 struct CheckpointFile;  // checkpoint.cc
 

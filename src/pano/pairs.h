@@ -6,7 +6,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "src/gs/trainer.h"
+#include "src/gs/training_view.h"
 
 namespace pano4d {
 

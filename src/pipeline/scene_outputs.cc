@@ -9,7 +9,7 @@
 #include "src/core/file.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
-#include "src/gs/trainer.h"
+#include "src/gs/checkpoint.h"
 #include "src/pano/frame.h"
 #include "src/pano/trajectory_io.h"
 
@@ -91,35 +91,35 @@ bool WriteVideo(const fs::path& path, const std::vector<cv::Mat>& frames,
   if (frames.empty()) return false;
   const cv::Size size = frames.front().size();
   if (size.width > kMaxMpeg4Side || size.height > kMaxMpeg4Side) {
-    notes->push_back(path.filename().string() + ": frames of " +
-                     std::to_string(size.width) + "x" +
-                     std::to_string(size.height) +
-                     " are larger than MPEG-4 takes (" +
-                     std::to_string(kMaxMpeg4Side) +
-                     " a side); the PNG frames have the same views");
+    notes->push_back(
+        path.filename().string() + ": frames of " + std::to_string(size.width) +
+        "x" + std::to_string(size.height) + " are larger than MPEG-4 takes (" +
+        std::to_string(kMaxMpeg4Side) +
+        " a side); the PNG frames have the same views");
     return false;
   }
   // OpenCV picks the container from the extension, so the temporary name
   // keeps it.
   const fs::path partial =
       path.parent_path() / (path.stem().string() + ".partial.mp4");
-  cv::VideoWriter writer(partial.string(),
-                         cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
-                         size);
+  cv::VideoWriter writer(
+      partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps, size);
   // OpenCV reports neither why it could not open a writer nor a failed
   // write: a disk with almost no room left is the likely cause to name.
   if (!writer.isOpened()) {
     notes->push_back(path.filename().string() +
-                     (DiskIsFull(path) ? ": the disk holding it is full"
-                                  : ": OpenCV could not open an MP4 writer (no "
-                                    "FFmpeg backend?)") +
+                     (DiskIsFull(path)
+                          ? ": the disk holding it is full"
+                          : ": OpenCV could not open an MP4 writer (no "
+                            "FFmpeg backend?)") +
                      "; the PNG frames have the same views");
     return false;
   }
   for (const cv::Mat& f : frames) writer.write(f);
   writer.release();
   std::error_code ec;
-  if (DiskIsFull(path) || !fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
+  if (DiskIsFull(path) || !fs::exists(partial, ec) ||
+      fs::file_size(partial, ec) == 0) {
     fs::remove(partial, ec);
     notes->push_back(path.filename().string() +
                      ": not written in full (the disk holding it is full?); "
