@@ -274,4 +274,62 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
   return loss;
 }
 
+namespace {
+
+// Rows per block of BlockSum.
+constexpr std::size_t kSumBlock = 4096;
+
+// The sum of term(i) over i < n, rows in parallel: blocks of kSumBlock rows
+// are summed in order, so the sum does not depend on the thread count.
+// term(i) may write to row i's own entries.
+template <typename Term>
+double BlockSum(std::size_t n, Term&& term) {
+  const std::ptrdiff_t blocks =
+      static_cast<std::ptrdiff_t>((n + kSumBlock - 1) / kSumBlock);
+  std::vector<double> sums(blocks, 0.0);
+  // One block is not worth waking the worker threads for.
+#pragma omp parallel for schedule(static) if (blocks > 1)
+  for (std::ptrdiff_t b = 0; b < blocks; ++b) {
+    const std::size_t end = std::min(n, (b + 1) * kSumBlock);
+    for (std::size_t i = b * kSumBlock; i < end; ++i) sums[b] += term(i);
+  }
+  double total = 0;
+  for (double v : sums) total += v;
+  return total;
+}
+
+}  // namespace
+
+double DepthL1Loss(const std::vector<float>& rendered,
+                   const std::vector<float>& given, float median, double weight,
+                   std::vector<float>* d_depth) {
+  d_depth->assign(given.size(), 0.0f);
+  std::size_t count = 0;
+  for (float d : given) count += d > 0;
+  double sum = 0;
+  const double scale = 1.0 / (static_cast<double>(count) * median);
+  const float g = static_cast<float>(weight * scale);
+  for (std::size_t p = 0; p < given.size(); ++p) {
+    if (!(given[p] > 0)) continue;
+    const float diff = rendered[p] - given[p];
+    sum += std::abs(diff);
+    (*d_depth)[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
+  }
+  return weight * sum * scale;
+}
+
+double AnisotropyLoss(const std::vector<float>& log_scales, double bound,
+                      double norm, std::vector<float>* d_log_scales) {
+  return BlockSum(log_scales.size() / 3, [&](std::size_t i) {
+    const float* s = &log_scales[i * 3];
+    const int hi = static_cast<int>(std::max_element(s, s + 3) - s);
+    const int lo = static_cast<int>(std::min_element(s, s + 3) - s);
+    const double ratio = std::exp(double(s[hi]) - s[lo]);
+    if (ratio <= bound) return 0.0;
+    (*d_log_scales)[i * 3 + hi] += static_cast<float>(norm * ratio);
+    (*d_log_scales)[i * 3 + lo] -= static_cast<float>(norm * ratio);
+    return norm * (ratio - bound);
+  });
+}
+
 }  // namespace pano4d

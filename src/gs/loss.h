@@ -37,4 +37,21 @@ PhotometricLoss ComputePhotometricLoss(
     std::vector<float>* d_rendered = nullptr,
     PhotometricLossBuffers* buffers = nullptr);
 
+// The depth term: mean |rendered - given| over the pixels with a given
+// depth (> 0), divided by the view's median depth so that a weight means
+// the same at any scene scale, times `weight`. Returns it, and writes its
+// gradient into `d_depth` (the image's size; 0 where no depth is given).
+// `median` and the count of given pixels must be positive.
+double DepthL1Loss(const std::vector<float>& rendered,
+                   const std::vector<float>& given, float median, double weight,
+                   std::vector<float>* d_depth);
+
+// The anisotropy term on log scales (rows of 3): `norm` x (ratio - bound)
+// for each Gaussian whose largest scale is over `bound` times its
+// smallest (ratio = largest / smallest), with its gradient added to
+// `d_log_scales` (largest and smallest only). Rows in parallel, summed in
+// a fixed order: the result does not depend on the thread count.
+double AnisotropyLoss(const std::vector<float>& log_scales, double bound,
+                      double norm, std::vector<float>* d_log_scales);
+
 }  // namespace pano4d

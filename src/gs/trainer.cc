@@ -61,28 +61,6 @@ std::optional<double> RefinementLoss(const std::vector<float>& rgb,
   return extra.weight * sum * norm;
 }
 
-// Rows per block of BlockSum.
-constexpr std::size_t kSumBlock = 4096;
-
-// The sum of term(i) over i < n, rows in parallel: blocks of kSumBlock rows
-// are summed in order, so the sum does not depend on the thread count.
-// term(i) may write to row i's own entries.
-template <typename Term>
-double BlockSum(std::size_t n, Term&& term) {
-  const std::ptrdiff_t blocks =
-      static_cast<std::ptrdiff_t>((n + kSumBlock - 1) / kSumBlock);
-  std::vector<double> sums(blocks, 0.0);
-  // One block is not worth waking the worker threads for.
-#pragma omp parallel for schedule(static) if (blocks > 1)
-  for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-    const std::size_t end = std::min(n, (b + 1) * kSumBlock);
-    for (std::size_t i = b * kSumBlock; i < end; ++i) sums[b] += term(i);
-  }
-  double total = 0;
-  for (double v : sums) total += v;
-  return total;
-}
-
 }  // namespace
 
 Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
@@ -320,71 +298,86 @@ void Trainer::Backprop(const RasterCamera& camera, int time,
 StepReport Trainer::Step() {
   strategy_.StepPreForward(iteration_, Optimised());
   StepReport report;
-  const RasterSettings settings = Settings();
   const TrainingView& view = views_[NextView()];
-  const int w = view.camera.width, h = view.camera.height;
+  RenderView(view);
+  ViewLosses(view, &report);
+  if (!std::isfinite(report.loss)) return SkipStep(view, report);
+  const auto start = Clock::now();
+  const double motion_before = times_.motion;
+  BackpropViewLosses(view);
+  AddRefinementView(&report);
+  AddRegularisers(&report);
+  times_.backward += Since(start) - (times_.motion - motion_before);
+  OptimiserStep(&report);
+  ++iteration_;
+  report.iteration = iteration_;
+  const auto densify_start = Clock::now();
+  strategy_.StepPostOptimise(iteration_, Optimised(), &rng_);
+  times_.densify += Since(densify_start);
+  return report;
+}
 
+void Trainer::RenderView(const TrainingView& view) {
   auto start = Clock::now();
   scene_.ComposeAt(view.time, &composed_);
   times_.compose += Since(start);
   start = Clock::now();
-  rasterizer_.Forward(composed_, view.camera, settings, &out_, &state_);
+  rasterizer_.Forward(composed_, view.camera, Settings(), &out_, &state_);
   times_.forward += Since(start);
+}
 
-  start = Clock::now();
-  // The loss sees the render in the view's own colours (its appearance
-  // transform), and carries the gradient back through it.
+void Trainer::ViewLosses(const TrainingView& view, StepReport* report) {
+  const auto start = Clock::now();
   const std::size_t view_index = &view - views_.data();
+  // The photometric loss sees the render in the view's own colours (its
+  // appearance transform), and carries the gradient back through it.
   const std::vector<float>* rendered = &out_.rgb;
   if (options_.appearance) {
     ApplyAppearance(appearance(view_index), out_.rgb, &corrected_);
     rendered = &corrected_;
   }
-  const PhotometricLoss photo =
-      ComputePhotometricLoss(*rendered, view.rgb, w, h, options_.ssim_weight,
-                             &d_out_.rgb, &loss_buffers_);
-  if (options_.appearance) {
-    appearance_grads_.assign(appearance_.size(), 0.0f);
-    float* d_transform = &appearance_grads_[view_index * kAppearanceWidth];
-    ApplyAppearanceBackward(appearance(view_index), out_.rgb, d_out_.rgb,
-                            &d_corrected_, d_transform);
-    d_out_.rgb.swap(d_corrected_);
-    report.appearance = AppearanceRegulariser(
-        appearance(view_index), options_.appearance_weight, d_transform);
-    // The reference frame keeps the identity: the Gaussians hold its
-    // colours (a gain shared by every transform and the colours is
-    // otherwise free).
-    if (view_index == kAppearanceReferenceView)
-      std::fill_n(d_transform, kAppearanceWidth, 0.0f);
-  }
-  report.l1 = photo.l1;
-  report.ssim = photo.ssim;
-  report.psnr = PsnrFromMse(photo.mse);
-  std::vector<float>& d_depth = d_out_.depth;
-  d_depth.clear();
-  const float median = median_depth_[&view - views_.data()];
+  const PhotometricLoss photo = ComputePhotometricLoss(
+      *rendered, view.rgb, view.camera.width, view.camera.height,
+      options_.ssim_weight, &d_out_.rgb, &loss_buffers_);
+  if (options_.appearance) AppearanceBackward(view_index, report);
+  report->l1 = photo.l1;
+  report->ssim = photo.ssim;
+  report->psnr = PsnrFromMse(photo.mse);
+  d_out_.depth.clear();
+  const float median = median_depth_[view_index];
   if (options_.depth_weight > 0 && !view.depth.empty() && median > 0) {
-    d_depth.assign(view.depth.size(), 0.0f);
-    std::size_t count = 0;
-    for (float d : view.depth) count += d > 0;
-    double sum = 0;
-    const double scale = 1.0 / (static_cast<double>(count) * median);
-    const float g = static_cast<float>(options_.depth_weight * scale);
-    for (std::size_t p = 0; p < view.depth.size(); ++p) {
-      if (!(view.depth[p] > 0)) continue;
-      const float diff = out_.depth[p] - view.depth[p];
-      sum += std::abs(diff);
-      d_depth[p] = diff > 0 ? g : (diff < 0 ? -g : 0.0f);
-    }
-    report.depth = options_.depth_weight * sum * scale;
+    report->depth = DepthL1Loss(out_.depth, view.depth, median,
+                                options_.depth_weight, &d_out_.depth);
   }
+  SurfaceLosses(view, report);
+  PriorLosses(view, report);
+  times_.loss += Since(start);
+  report->loss = photo.total + report->depth + report->normal + report->hidden +
+                 report->appearance + report->flow + report->disparity;
+}
+
+void Trainer::AppearanceBackward(std::size_t view_index, StepReport* report) {
+  appearance_grads_.assign(appearance_.size(), 0.0f);
+  float* d_transform = &appearance_grads_[view_index * kAppearanceWidth];
+  ApplyAppearanceBackward(appearance(view_index), out_.rgb, d_out_.rgb,
+                          &d_corrected_, d_transform);
+  d_out_.rgb.swap(d_corrected_);
+  report->appearance = AppearanceRegulariser(
+      appearance(view_index), options_.appearance_weight, d_transform);
+  // The reference frame keeps the identity: the Gaussians hold its colours
+  // (a gain shared by every transform and the colours is otherwise free).
+  if (view_index == kAppearanceReferenceView)
+    std::fill_n(d_transform, kAppearanceWidth, 0.0f);
+}
+
+void Trainer::SurfaceLosses(const TrainingView& view, StepReport* report) {
   direct_grads_.means.clear();
   direct_grads_.log_scales.clear();
   direct_grads_.quats.clear();
   if (options_.normal_weight > 0 && !view.depth.empty()) {
     direct_grads_.log_scales.assign(composed_.log_scales.size(), 0.0f);
     direct_grads_.quats.assign(composed_.quats.size(), 0.0f);
-    report.normal =
+    report->normal =
         NormalFlatnessLoss(composed_, view.camera, view.depth,
                            options_.normal_weight, options_.normal_tolerance,
                            &direct_grads_.log_scales, &direct_grads_.quats)
@@ -393,28 +386,26 @@ StepReport Trainer::Step() {
   if (options_.hidden_weight > 0 && !view.depth.empty() &&
       !view.dynamic.empty() && scene_.dynamics.size() > 0) {
     direct_grads_.means.assign(composed_.means.size(), 0.0f);
-    report.hidden =
+    report->hidden =
         HiddenDepthLoss(composed_, scene_.statics.size(), view.camera,
                         view.depth, view.dynamic, options_.hidden_weight,
                         options_.hidden_thickness, &direct_grads_.means)
             .loss;
   }
-  PriorLosses(view, &report);
-  times_.loss += Since(start);
-  report.loss = photo.total + report.depth + report.normal + report.hidden +
-                report.appearance + report.flow + report.disparity;
-  if (!std::isfinite(report.loss)) {
-    ++skipped_steps_total_;
-    ++iteration_;
-    report.iteration = iteration_;
-    report.skipped_step = true;
-    PANO4D_LOG(kWarning) << "fit: iteration " << iteration_ << " (view "
-                         << view.name
-                         << "): the loss is not finite; step skipped";
-    return report;
-  }
+}
 
-  start = Clock::now();
+StepReport Trainer::SkipStep(const TrainingView& view, StepReport report) {
+  ++skipped_steps_total_;
+  ++iteration_;
+  report.iteration = iteration_;
+  report.skipped_step = true;
+  PANO4D_LOG(kWarning) << "fit: iteration " << iteration_ << " (view "
+                       << view.name
+                       << "): the loss is not finite; step skipped";
+  return report;
+}
+
+void Trainer::BackpropViewLosses(const TrainingView& view) {
   static_grads_.Assign(scene_.statics);
   dynamic_grads_.Assign(scene_.dynamics);
   logit_grads_.assign(scene_.logits.size(), 0.0f);
@@ -422,89 +413,72 @@ StepReport Trainer::Step() {
   basis_grads_.num_times = scene_.bases.num_times;
   basis_grads_.rotations.assign(scene_.bases.rotations.size(), 0.0f);
   basis_grads_.translations.assign(scene_.bases.translations.size(), 0.0f);
-  const double motion_before = times_.motion;
   Backprop(view.camera, view.time, state_, out_, d_out_, &direct_grads_);
   PriorBackward();
   strategy_.StepPostBackward(state_, grads_);
+}
 
-  if (extra_view) {
-    if (const ExtraView* extra = extra_view(iteration_)) {
-      scene_.ComposeAt(extra->time, &composed_);
-      rasterizer_.Forward(composed_, extra->camera, settings, &extra_out_,
-                          &extra_state_);
-      if (const std::optional<double> loss =
-              RefinementLoss(extra_out_.rgb, *extra, &d_extra_.rgb)) {
-        report.extra = *loss;
-        report.loss += report.extra;
-        Backprop(extra->camera, extra->time, extra_state_, extra_out_,
-                 d_extra_);
-      }
-    }
+void Trainer::AddRefinementView(StepReport* report) {
+  if (!extra_view) return;
+  const ExtraView* extra = extra_view(iteration_);
+  if (extra == nullptr) return;
+  scene_.ComposeAt(extra->time, &composed_);
+  rasterizer_.Forward(composed_, extra->camera, Settings(), &extra_out_,
+                      &extra_state_);
+  if (const std::optional<double> loss =
+          RefinementLoss(extra_out_.rgb, *extra, &d_extra_.rgb)) {
+    report->extra = *loss;
+    report->loss += report->extra;
+    Backprop(extra->camera, extra->time, extra_state_, extra_out_, d_extra_);
   }
+}
+
+void Trainer::AddRegularisers(StepReport* report) {
   if (options_.anisotropy_weight > 0 && scene_.size() > 0) {
     const double norm = options_.anisotropy_weight / scene_.size();
-    const double bound = options_.max_anisotropy;
-    for (const auto& pair :
-         {std::pair{&scene_.statics.log_scales, &static_grads_.log_scales},
-          {&scene_.dynamics.log_scales, &dynamic_grads_.log_scales}}) {
-      // Named, not bound: clang before 16 cannot capture a structured
-      // binding in the lambda (the fuzz build uses clang 14).
-      const std::vector<float>* log_scales = pair.first;
-      std::vector<float>* grads = pair.second;
-      report.anisotropy += BlockSum(log_scales->size() / 3, [&](std::size_t i) {
-        const float* s = &(*log_scales)[i * 3];
-        const int hi = static_cast<int>(std::max_element(s, s + 3) - s);
-        const int lo = static_cast<int>(std::min_element(s, s + 3) - s);
-        const double ratio = std::exp(double(s[hi]) - s[lo]);
-        if (ratio <= bound) return 0.0;
-        (*grads)[i * 3 + hi] += static_cast<float>(norm * ratio);
-        (*grads)[i * 3 + lo] -= static_cast<float>(norm * ratio);
-        return norm * (ratio - bound);
-      });
-    }
-    report.loss += report.anisotropy;
+    report->anisotropy =
+        AnisotropyLoss(scene_.statics.log_scales, options_.max_anisotropy, norm,
+                       &static_grads_.log_scales);
+    report->anisotropy +=
+        AnisotropyLoss(scene_.dynamics.log_scales, options_.max_anisotropy,
+                       norm, &dynamic_grads_.log_scales);
+    report->loss += report->anisotropy;
   }
   if (scene_.has_motion() && options_.smoothness_weight > 0) {
-    report.smoothness = MotionSmoothnessLoss(
+    report->smoothness = MotionSmoothnessLoss(
         scene_.bases, options_.smoothness_weight, &basis_grads_, extent_);
-    report.loss += report.smoothness;
+    report->loss += report->smoothness;
   }
-  times_.backward += Since(start) - (times_.motion - motion_before);
+}
 
-  start = Clock::now();
+void Trainer::OptimiserStep(StepReport* report) {
+  const auto start = Clock::now();
   UpdateLearningRates();
-  report.skipped_rows +=
+  report->skipped_rows +=
       static_adam_
           .Step({&static_grads_.means, &static_grads_.log_scales,
                  &static_grads_.quats, &static_grads_.opacities,
                  &static_grads_.sh})
           .skipped_rows;
   if (scene_.has_motion()) {
-    report.skipped_rows +=
+    report->skipped_rows +=
         dynamic_adam_
             .Step({&dynamic_grads_.means, &dynamic_grads_.log_scales,
                    &dynamic_grads_.quats, &dynamic_grads_.opacities,
                    &dynamic_grads_.sh, &logit_grads_})
             .skipped_rows;
-    report.skipped_rows +=
+    report->skipped_rows +=
         basis_adam_.Step({&basis_grads_.rotations, &basis_grads_.translations})
             .skipped_rows;
   }
   if (options_.appearance) {
-    report.skipped_rows +=
+    report->skipped_rows +=
         appearance_adam_.Step({&appearance_grads_}).skipped_rows;
   }
   for (float& v : scene_.statics.log_scales)
     v = std::min(v, max_static_log_scale_);
-  skipped_rows_total_ += report.skipped_rows;
+  skipped_rows_total_ += report->skipped_rows;
   times_.optimise += Since(start);
-  ++iteration_;
-  report.iteration = iteration_;
-
-  start = Clock::now();
-  strategy_.StepPostOptimise(iteration_, Optimised(), &rng_);
-  times_.densify += Since(start);
-  return report;
 }
 
 void Trainer::PriorLosses(const TrainingView& view, StepReport* report) {
@@ -536,8 +510,8 @@ void Trainer::PriorLosses(const TrainingView& view, StepReport* report) {
     back.d_means.assign(nd * 3, 0.0f);
     report->flow +=
         FlowLoss(composed_, scene_.statics.size(), flow_posed_.means,
-                 view.camera, other.camera, f.flow, f.valid, out_.depth,
-                 weight, options_.flow_tolerance, options_.flow_huber_pixels,
+                 view.camera, other.camera, f.flow, f.valid, out_.depth, weight,
+                 options_.flow_tolerance, options_.flow_huber_pixels,
                  &direct_grads_.means, &back.d_means)
             .loss;
   }

@@ -127,6 +127,28 @@ class Trainer : public SceneEditor {
     return {&scene_, &static_adam_, &dynamic_adam_};
   }
   void UpdateLearningRates();
+  // The steps of Step(), in order. The training view composed at its time
+  // and rendered (out_, state_).
+  void RenderView(const TrainingView& view);
+  // Its losses (photometric through its appearance transform, depth,
+  // surface, priors) into `report`, their gradients into d_out_ and
+  // direct_grads_.
+  void ViewLosses(const TrainingView& view, StepReport* report);
+  void AppearanceBackward(std::size_t view_index, StepReport* report);
+  // The depth-normal flatness and hidden-depth terms (surface_loss.h), on
+  // the composed Gaussians themselves.
+  void SurfaceLosses(const TrainingView& view, StepReport* report);
+  // A non-finite loss: the step is counted, logged and skipped.
+  StepReport SkipStep(const TrainingView& view, StepReport report);
+  // The view's losses back to the static, dynamic and basis gradients;
+  // the strategy's statistics.
+  void BackpropViewLosses(const TrainingView& view);
+  // The expansion's refinement view (extra_view), when it gives one.
+  void AddRefinementView(StepReport* report);
+  // The anisotropy and motion-smoothness terms on the parameters.
+  void AddRegularisers(StepReport* report);
+  // Adam on every group, then the static scale clamp.
+  void OptimiserStep(StepReport* report);
   // The learned priors' losses on the training view's render (prior_loss.h):
   // disparity into d_out_.depth; flow into direct_grads_.means for this
   // time and into flow_backward_ for the flows' other times.
