@@ -380,175 +380,204 @@ void Expansion::Prepare(const SceneEditor& fit) {
 ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   const auto start = std::chrono::steady_clock::now();
   Prepare(*fit);
-  const int directions = options_.geometry.directions;
-  const std::size_t ns = sources_.size();
   ExpansionStepReport report;
   report.step = e;
   report.angle_degrees = e * options_.geometry.alpha_degrees;
   report.prior = prior_->name();
-
-  std::vector<RasterCamera> source_cameras;
-  std::vector<int> times;
-  for (const Source& s : sources_) {
-    source_cameras.push_back(s.camera);
-    times.push_back(s.time);
-  }
-  std::vector<ExpandedView> cams = ExpansionViews(
-      options_.geometry, reference_, frame_.center, source_cameras, times, e);
-  NameViews(*fit, &cams);
-
-  // The sources' warp depth (options' warp_depth), fixed for the whole
-  // step.
-  const std::vector<TrainingView>& views = fit->views();
-  std::vector<cv::Mat> rgb(ns), depth(ns);
-  RenderOutput out;
-  for (std::size_t s = 0; s < ns; ++s) {
-    const TrainingView& v = views[sources_[s].view];
-    rgb[s] = MatView(v.rgb, v.camera.height, v.camera.width, 3);
-    depth[s] = SourceDepth(fit, v, options_.warp_depth, &out);
-  }
-  // The sources' moving pixels, for the prior; empty where a view has no
-  // dynamic mask.
-  std::vector<cv::Mat> moving(ns);
-  for (std::size_t s = 0; s < ns; ++s) {
-    const TrainingView& v = views[sources_[s].view];
-    if (!v.dynamic.empty()) moving[s] = MovingMask(v);
-  }
-
+  const StepSources sources = GatherSources(fit, e);
   const bool chain = last_step_ == e - 1 && !previous_.empty();
   const std::filesystem::path dir = StepDir(e);
   std::filesystem::remove_all(dir);
+  const int directions = options_.geometry.directions;
+  const std::size_t ns = sources_.size();
   std::vector<Refined> current(directions * ns);
-  PointCloud points;
-  std::vector<double> point_depths, focals;
-  double hole_sum = 0, holes = 0, prefilled = 0, cracks = 0;
-  Json cameras_json = Json::array();
+  NewPoints points;
+  WarpStats warp;
   ProgressBar bar(
       StringPrintf("expansion step %d (%g deg)", e, report.angle_degrees),
-      static_cast<std::int64_t>(cams.size()), std::cerr,
+      static_cast<std::int64_t>(sources.views.size()), std::cerr,
       ProgressBar::Mode::kAuto, kStepProgressAfterSeconds);
   for (int m = 0; m < directions; ++m) {
-    PriorClip clip;
-    clip.name = "step" + ZeroPadded(e, 2) + "_dir" + std::to_string(m);
-    std::vector<cv::Mat> original_masks(ns);
-    for (std::size_t s = 0; s < ns; ++s) {
-      const ExpandedView& v = cams[m * ns + s];
-      WarpResult w =
-          ForwardWarp(rgb[s], depth[s], sources_[s].camera, v.camera);
-      if (!moving[s].empty()) {
-        clip.moving.push_back(
-            WarpMoving(moving[s], depth[s], sources_[s].camera, v.camera));
-      }
-      original_masks[s] = w.mask.clone();
-      const int hole = cv::countNonZero(w.mask);
-      hole_sum += static_cast<double>(hole) / w.mask.total();
-      holes += hole;
-      cracks += static_cast<double>(CountCracks(w.mask));
-      if (chain) {
-        const Refined& p = previous_[m * ns + s];
-        prefilled +=
-            FillHoles(ForwardWarp(p.rgb, p.depth, p.camera, v.camera), &w);
-      }
-      clip.frames.push_back(w.rgb);
-      clip.masks.push_back(w.mask);
-      clip.depth.push_back(w.depth);
-      clip.cameras.push_back(v.camera);
-      clip.times.push_back(v.t);
-      clip.references.push_back(rgb[s]);
-      clip.reference_cameras.push_back(sources_[s].camera);
-      cameras_json.push_back(ToJson(v));
-    }
+    std::vector<cv::Mat> masks;
+    PriorClip clip = WarpDirection(sources, e, m, chain, &masks, &warp);
     KeepMovingIfEveryFrameHasIt(&clip);
     const PriorResult filled = prior_->Fill(clip);
     if (filled.prior != prior_->name()) {
       ++report.fallbacks;
       report.prior = prior_->name() + " -> " + filled.prior;
     }
-    const std::filesystem::path dm = dir / ("dir_" + std::to_string(m));
-    for (std::size_t s = 0; s < ns; ++s) {
-      const ExpandedView& v = cams[m * ns + s];
-      const cv::Mat refined =
-          Quantised(Composite(clip.frames[s], filled.frames[s], clip.masks[s]));
-      const cv::Mat refined_depth =
-          RefinedDepth(clip.depth[s], clip.masks[s],
-                       filled.depth.empty() ? cv::Mat() : filled.depth[s]);
-      current[m * ns + s] = {v.camera, refined, refined_depth};
-      const std::string& id = v.name;
-      WriteImage(dm / "warped" / (id + ".png"),
-                 Image::FromRgb32f(clip.frames[s].clone()));
-      WriteMask(dm / "mask" / (id + ".png"), original_masks[s]);
-      WriteImage(dm / "refined" / (id + ".png"),
-                 Image::FromRgb32f(refined.clone()));
-      WriteNpy(
-          dm / "depth" / (id + ".npy"),
-          NpyArray::FromFloats({refined_depth.rows, refined_depth.cols},
-                               std::vector<float>(refined_depth.begin<float>(),
-                                                  refined_depth.end<float>())));
-      if (!options_.gaussian_refinement) continue;
-      fit->Render(v.camera, v.t, &out);
-      const RasterCamera& c = v.camera;
-      for (int y = 0; y < c.height; y += options_.new_gaussian_stride) {
-        for (int x = 0; x < c.width; x += options_.new_gaussian_stride) {
-          const std::size_t p = static_cast<std::size_t>(y) * c.width + x;
-          const float z = refined_depth.at<float>(y, x);
-          if (!original_masks[s].at<std::uint8_t>(y, x) ||
-              out.alpha[p] >= kCoveredAlpha || !(z > 0))
-            continue;
-          const Eigen::Vector3f xc((x + 0.5f - c.cx) / c.fx * z,
-                                   (y + 0.5f - c.cy) / c.fy * z, z);
-          points.points.push_back(c.rotation.transpose() *
-                                  (xc - c.translation));
-          const cv::Vec3f col = refined.at<cv::Vec3f>(y, x);
-          points.colors.emplace_back(col[0], col[1], col[2]);
-          point_depths.push_back(z);
-        }
-      }
-      focals.push_back(0.5 * (c.fx + c.fy));
-      expanded_seen_.push_back(
-          MakeSeenDepth(c, refined_depth, original_masks[s]));
-      StoredView stored{c, v.t, cv::Mat(), original_masks[s]};
-      refined.convertTo(stored.target, CV_8UC3, 255.0);
-      views_.push_back(std::move(stored));
-    }
+    KeepDirection(fit, sources, m, clip, filled, masks,
+                  dir / ("dir_" + std::to_string(m)), &current, &points);
     bar.Add(static_cast<std::int64_t>(ns));
   }
   bar.Finish();
+  Json cameras_json = Json::array();
+  for (const ExpandedView& v : sources.views) cameras_json.push_back(ToJson(v));
   WriteJson(dir / "cameras.json", {{"step", e},
                                    {"angle_degrees", report.angle_degrees},
                                    {"views", cameras_json}});
   previous_ = std::move(current);
   last_step_ = e;
-  report.views = static_cast<int>(cams.size());
-  report.hole_fraction = cams.empty() ? 0.0 : hole_sum / cams.size();
-  report.prefilled_fraction = holes > 0 ? prefilled / holes : 0.0;
-  report.crack_fraction = holes > 0 ? cracks / holes : 0.0;
-
-  if (options_.gaussian_refinement) {
-    report.carved = Carve(fit);
-    if (points.size() > 0) {  // checked against this step's views
-      const std::vector<SeenDepth> step_views(
-          expanded_seen_.end() - static_cast<std::ptrdiff_t>(cams.size()),
-          expanded_seen_.end());
-      report.rejected_in_free_space = KeepOutOfSeenFreeSpace(
-          frames_seen_, step_views, &points, &point_depths);
-    }
-  }
-  if (options_.gaussian_refinement && points.size() > 0) {
-    const double voxel =
-        UpperMedian(point_depths) * options_.voxel_pixels / UpperMedian(focals);
-    PointCloudFilterOptions filter;
-    filter.voxel_size = voxel;
-    InitOptions init;
-    init.sh_degree = fit->scene().statics.sh_degree;
-    const PointCloud kept = FilterPointCloud(points, filter);
-    report.new_gaussians =
-        fit->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
-  }
-  all_cameras_.insert(all_cameras_.end(), cams.begin(), cams.end());
+  const std::size_t count = sources.views.size();
+  report.views = static_cast<int>(count);
+  report.hole_fraction = count == 0 ? 0.0 : warp.hole_sum / count;
+  report.prefilled_fraction =
+      warp.holes > 0 ? warp.prefilled / warp.holes : 0.0;
+  report.crack_fraction = warp.holes > 0 ? warp.cracks / warp.holes : 0.0;
+  if (options_.gaussian_refinement)
+    AddStepGaussians(fit, count, &points, &report);
+  all_cameras_.insert(all_cameras_.end(), sources.views.begin(),
+                      sources.views.end());
   report.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   return report;
+}
+
+Expansion::StepSources Expansion::GatherSources(SceneEditor* fit, int e) {
+  StepSources out;
+  std::vector<RasterCamera> source_cameras;
+  std::vector<int> times;
+  for (const Source& s : sources_) {
+    source_cameras.push_back(s.camera);
+    times.push_back(s.time);
+  }
+  out.views = ExpansionViews(options_.geometry, reference_, frame_.center,
+                             source_cameras, times, e);
+  NameViews(*fit, &out.views);
+  // The sources' warp depth (options' warp_depth), fixed for the whole
+  // step, and their moving pixels for the prior (empty where a view has no
+  // dynamic mask).
+  const std::vector<TrainingView>& views = fit->views();
+  const std::size_t ns = sources_.size();
+  out.rgb.resize(ns);
+  out.depth.resize(ns);
+  out.moving.resize(ns);
+  RenderOutput rendered;
+  for (std::size_t s = 0; s < ns; ++s) {
+    const TrainingView& v = views[sources_[s].view];
+    out.rgb[s] = MatView(v.rgb, v.camera.height, v.camera.width, 3);
+    out.depth[s] = SourceDepth(fit, v, options_.warp_depth, &rendered);
+  }
+  for (std::size_t s = 0; s < ns; ++s) {
+    const TrainingView& v = views[sources_[s].view];
+    if (!v.dynamic.empty()) out.moving[s] = MovingMask(v);
+  }
+  return out;
+}
+
+PriorClip Expansion::WarpDirection(const StepSources& sources, int e, int m,
+                                   bool chain, std::vector<cv::Mat>* masks,
+                                   WarpStats* stats) const {
+  const std::size_t ns = sources_.size();
+  PriorClip clip;
+  clip.name = "step" + ZeroPadded(e, 2) + "_dir" + std::to_string(m);
+  masks->assign(ns, cv::Mat());
+  for (std::size_t s = 0; s < ns; ++s) {
+    const ExpandedView& v = sources.views[m * ns + s];
+    WarpResult w = ForwardWarp(sources.rgb[s], sources.depth[s],
+                               sources_[s].camera, v.camera);
+    if (!sources.moving[s].empty()) {
+      clip.moving.push_back(WarpMoving(sources.moving[s], sources.depth[s],
+                                       sources_[s].camera, v.camera));
+    }
+    (*masks)[s] = w.mask.clone();
+    const int hole = cv::countNonZero(w.mask);
+    stats->hole_sum += static_cast<double>(hole) / w.mask.total();
+    stats->holes += hole;
+    stats->cracks += static_cast<double>(CountCracks(w.mask));
+    if (chain) {
+      const Refined& p = previous_[m * ns + s];
+      stats->prefilled +=
+          FillHoles(ForwardWarp(p.rgb, p.depth, p.camera, v.camera), &w);
+    }
+    clip.frames.push_back(w.rgb);
+    clip.masks.push_back(w.mask);
+    clip.depth.push_back(w.depth);
+    clip.cameras.push_back(v.camera);
+    clip.times.push_back(v.t);
+    clip.references.push_back(sources.rgb[s]);
+    clip.reference_cameras.push_back(sources_[s].camera);
+  }
+  return clip;
+}
+
+void Expansion::KeepDirection(SceneEditor* fit, const StepSources& sources,
+                              int m, const PriorClip& clip,
+                              const PriorResult& filled,
+                              const std::vector<cv::Mat>& masks,
+                              const std::filesystem::path& dir,
+                              std::vector<Refined>* current,
+                              NewPoints* points) {
+  const std::size_t ns = sources_.size();
+  RenderOutput out;
+  for (std::size_t s = 0; s < ns; ++s) {
+    const ExpandedView& v = sources.views[m * ns + s];
+    const cv::Mat refined =
+        Quantised(Composite(clip.frames[s], filled.frames[s], clip.masks[s]));
+    const cv::Mat refined_depth =
+        RefinedDepth(clip.depth[s], clip.masks[s],
+                     filled.depth.empty() ? cv::Mat() : filled.depth[s]);
+    (*current)[m * ns + s] = {v.camera, refined, refined_depth};
+    const std::string& id = v.name;
+    WriteImage(dir / "warped" / (id + ".png"),
+               Image::FromRgb32f(clip.frames[s].clone()));
+    WriteMask(dir / "mask" / (id + ".png"), masks[s]);
+    WriteImage(dir / "refined" / (id + ".png"),
+               Image::FromRgb32f(refined.clone()));
+    WriteNpy(
+        dir / "depth" / (id + ".npy"),
+        NpyArray::FromFloats({refined_depth.rows, refined_depth.cols},
+                             std::vector<float>(refined_depth.begin<float>(),
+                                                refined_depth.end<float>())));
+    if (!options_.gaussian_refinement) continue;
+    fit->Render(v.camera, v.t, &out);
+    const RasterCamera& c = v.camera;
+    for (int y = 0; y < c.height; y += options_.new_gaussian_stride) {
+      for (int x = 0; x < c.width; x += options_.new_gaussian_stride) {
+        const std::size_t p = static_cast<std::size_t>(y) * c.width + x;
+        const float z = refined_depth.at<float>(y, x);
+        if (!masks[s].at<std::uint8_t>(y, x) || out.alpha[p] >= kCoveredAlpha ||
+            !(z > 0))
+          continue;
+        const Eigen::Vector3f xc((x + 0.5f - c.cx) / c.fx * z,
+                                 (y + 0.5f - c.cy) / c.fy * z, z);
+        points->cloud.points.push_back(c.rotation.transpose() *
+                                       (xc - c.translation));
+        const cv::Vec3f col = refined.at<cv::Vec3f>(y, x);
+        points->cloud.colors.emplace_back(col[0], col[1], col[2]);
+        points->depths.push_back(z);
+      }
+    }
+    points->focals.push_back(0.5 * (c.fx + c.fy));
+    expanded_seen_.push_back(MakeSeenDepth(c, refined_depth, masks[s]));
+    StoredView stored{c, v.t, cv::Mat(), masks[s]};
+    refined.convertTo(stored.target, CV_8UC3, 255.0);
+    views_.push_back(std::move(stored));
+  }
+}
+
+void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
+                                 NewPoints* points,
+                                 ExpansionStepReport* report) {
+  report->carved = Carve(fit);
+  if (points->cloud.size() == 0) return;
+  // Checked against this step's views.
+  const std::vector<SeenDepth> step_seen(
+      expanded_seen_.end() - static_cast<std::ptrdiff_t>(step_views),
+      expanded_seen_.end());
+  report->rejected_in_free_space = KeepOutOfSeenFreeSpace(
+      frames_seen_, step_seen, &points->cloud, &points->depths);
+  if (points->cloud.size() == 0) return;
+  const double voxel = UpperMedian(points->depths) * options_.voxel_pixels /
+                       UpperMedian(points->focals);
+  PointCloudFilterOptions filter;
+  filter.voxel_size = voxel;
+  InitOptions init;
+  init.sh_degree = fit->scene().statics.sh_degree;
+  const PointCloud kept = FilterPointCloud(points->cloud, filter);
+  report->new_gaussians =
+      fit->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
 }
 
 std::int64_t Expansion::Carve(SceneEditor* fit) {

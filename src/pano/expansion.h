@@ -8,6 +8,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core.hpp>
 
+#include "src/geometry/point_cloud.h"
 #include "src/gs/scene_editor.h"
 #include "src/pano/frame.h"
 #include "src/pano/free_space.h"
@@ -178,6 +179,39 @@ class Expansion {
   // Each view named after its source frame (views in ExpansionViews' order).
   void NameViews(const SceneEditor& fit,
                  std::vector<ExpandedView>* views) const;
+
+  // The steps of RunStep. What a step warps: its views (directions x
+  // sources) and per source its frame, warp depth and moving pixels.
+  struct StepSources {
+    std::vector<ExpandedView> views;
+    std::vector<cv::Mat> rgb, depth, moving;
+  };
+  StepSources GatherSources(SceneEditor* fit, int e);
+  // Direction m's clip for the prior: each source warped into its view
+  // (and, chained, the previous step's result warped there into the
+  // holes); the warp's own masks (before chaining) in `masks`.
+  struct WarpStats {
+    double hole_sum = 0, holes = 0, prefilled = 0, cracks = 0;
+  };
+  PriorClip WarpDirection(const StepSources& sources, int e, int m, bool chain,
+                          std::vector<cv::Mat>* masks, WarpStats* stats) const;
+  // Direction m's refined views kept: written under `dir` (warped, mask,
+  // refined, depth), stored for L_refine and the next step, and, with
+  // Gaussian refinement, the points of M_e the Gaussians do not cover yet
+  // unprojected into `points`.
+  struct NewPoints {
+    PointCloud cloud;
+    std::vector<double> depths, focals;
+  };
+  void KeepDirection(SceneEditor* fit, const StepSources& sources, int m,
+                     const PriorClip& clip, const PriorResult& filled,
+                     const std::vector<cv::Mat>& masks,
+                     const std::filesystem::path& dir,
+                     std::vector<Refined>* current, NewPoints* points);
+  // Carving, then the new points outside seen free space as static
+  // Gaussians (voxel-filtered at the step's scale).
+  void AddStepGaussians(SceneEditor* fit, std::size_t step_views,
+                        NewPoints* points, ExpansionStepReport* report);
 
   ExpansionOptions options_;
   std::uint64_t seed_;
