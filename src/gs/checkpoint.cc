@@ -96,7 +96,7 @@ void Trainer::SaveCheckpoint(const fs::path& path) const {
   std::vector<std::string> names;
   for (const TrainingView& v : views_) names.push_back(v.name);
   nlohmann::json header = {
-      {"format", "pano4d checkpoint 1"},
+      {"format", "pano4d checkpoint 2"},
       {"iteration", iteration_},
       {"options", options_.ToJson()},
       {"fingerprint", fingerprint_},
