@@ -54,8 +54,8 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
   const fs::path ws = dir / "ws";
   ASSERT_EQ(
       RunPano4d("run --video " + Quote(video) + " --workspace " + Quote(ws) +
-                    " --max-size 480 --holdout 8 --iterations 1000 "
-                    "--expand-every 400 --validate-every 500",
+                    " --max-size 480 --holdout 8 --iterations 600 "
+                    "--expand-every 300 --validate-every 300",
                 dir / "run.log"),
       0)
       << Slurp(dir / "run.log");
@@ -109,9 +109,11 @@ TEST_F(FitRealDataTest, LadyRunningThroughRunWithPlanAndExpandedViews) {
   EXPECT_GT(fit.at("dynamic_gaussians").get<int>(), 0);
   EXPECT_FALSE(fit.at("expansion").at("steps").empty());
   EXPECT_EQ(fit["expansion"].at("options").at("warp_depth"), "rendered");
-  // Measured (2 cores, 1000 iterations, an expansion every 400): held out
-  // 21.66 dB; without expansion, training 22.3 and held out 21.2.
-  EXPECT_GT(train_psnr, 20.0);
+  // Measured (2 cores, 600 iterations, an expansion at 300: 666 s, the
+  // longest test of the suite): training 20.84 dB, held out 19.99; at 1000
+  // iterations (922 s) 21.69 and 20.63. The floors leave a margin for
+  // thread scheduling and compilers; a broken stage falls far below them.
+  EXPECT_GT(train_psnr, 19.5);
   EXPECT_GT(val_psnr, 18.0);
   EXPECT_LT(val_psnr, train_psnr);
 }
