@@ -205,8 +205,9 @@ void CheckPlainName(const std::string& name, const std::string& source,
     problem = "is not a file name";
   else if (name.find('/') != std::string::npos ||
            name.find('\0') != std::string::npos)
-    problem = "holds a '/' or NUL: a name read from a workspace may not "
-              "name a path, least of all one outside the workspace";
+    problem =
+        "holds a '/' or NUL: a name read from a workspace may not "
+        "name a path, least of all one outside the workspace";
   else if (name.size() > kMaxPlainNameBytes)
     problem = "is longer than the 200 bytes a name may have here";
   if (!problem) return;

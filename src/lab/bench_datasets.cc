@@ -150,12 +150,12 @@ Entry RunScene(const fs::path& dir, const std::string& suite,
 }
 
 std::string TableCsvRow(const std::string& scene, const std::string& suite,
-                   const std::string& method, const std::string& source,
-                   const std::string& status, const std::string& error,
-                   const MetricRow& values, const std::string& seconds,
-                   const std::string& memory) {
-  std::vector<std::string> fields = {scene, suite, method, source, status,
-                                     error};
+                        const std::string& method, const std::string& source,
+                        const std::string& status, const std::string& error,
+                        const MetricRow& values, const std::string& seconds,
+                        const std::string& memory) {
+  std::vector<std::string> fields = {scene,  suite,  method,
+                                     source, status, error};
   for (std::size_t k = 0; k < kNumMetrics; ++k)
     fields.push_back(values[k] ? StringPrintf("%.6f", *values[k]) : "");
   fields.push_back(seconds);
@@ -290,13 +290,13 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
         e.status == "done" ? "pano4d" : "pano4d: " + e.status + ": " + e.error,
         e.values, seconds, memory);
     csv << TableCsvRow(e.scene, e.suite, "pano4d", "pano4d", e.status, e.error,
-                  e.values, seconds, memory);
+                       e.values, seconds, memory);
     for (const PublishedRow& p : PublishedRows(benchmarks[e.suite], e.scene)) {
       if (p.mean) continue;
       md << BenchMarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
                              p.values, "", "");
       csv << TableCsvRow(e.scene, e.suite, p.method, p.source, "published", "",
-                    p.values, "", "");
+                         p.values, "", "");
     }
     result.rows.push_back(e.ToJson());
   }
@@ -341,7 +341,7 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
       md << BenchMarkdownRow("mean", suite, p.method + " (" + p.source + ")",
                              p.values, "", "");
       csv << TableCsvRow("mean", suite, p.method, p.source, "published", "",
-                    p.values, "", "");
+                         p.values, "", "");
     }
   }
   md << "\nSeconds of a mean row: per scene; peak memory: the largest.\n";

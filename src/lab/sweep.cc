@@ -452,7 +452,8 @@ std::string SubmitSbatch(const fs::path& script) {
   const ProcessResult r =
       RunProcess({sbatch->string(), "--parsable", script.string()}, log);
   if (!r.ok())
-    throw Error("sbatch", script.string(), "", "failed: " + ProcessFailure(r, log));
+    throw Error("sbatch", script.string(), "",
+                "failed: " + ProcessFailure(r, log));
   const std::string last = LastLines(log, 1);
   return last.substr(0, last.find_first_of(";\n"));
 }

@@ -424,9 +424,9 @@ TEST_F(FitBinaryTest, AFinishedFitIsReplacedOnlyWithForce) {
   // fit first".
   fs::rename(ws / "pano4d/checkpoints/fit.ckpt",
              ws / "pano4d/previous_fit/checkpoints/fit.ckpt");
-  EXPECT_EQ(RunPano4d("export --workspace '" + ws.string() + "'",
-                      ws / "export.log"),
-            1);
+  EXPECT_EQ(
+      RunPano4d("export --workspace '" + ws.string() + "'", ws / "export.log"),
+      1);
   const std::string export_log = Slurp(ws / "export.log");
   EXPECT_NE(export_log.find("previous_fit"), std::string::npos) << export_log;
   EXPECT_NE(export_log.find("has not completed"), std::string::npos)

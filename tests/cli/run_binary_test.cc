@@ -341,7 +341,8 @@ TEST_F(RunBinaryTest, RenderAndExportTheFittedScene) {
                      "a killed run's temporary");
   ASSERT_EQ(RunPano4d("export" + w, log), 0) << Slurp(log);
   EXPECT_FALSE(fs::exists(ws / "pano4d/export/ply/t_00099.ply"));
-  EXPECT_FALSE(fs::exists(ws / "pano4d/export/ply/t_00004.tmp.999999999.4.ply"));
+  EXPECT_FALSE(
+      fs::exists(ws / "pano4d/export/ply/t_00004.tmp.999999999.4.ply"));
   EXPECT_FALSE(fs::exists(ws / "pano4d/export/INCOMPLETE"));
   const nlohmann::json frames = ReadJson(ws / "pano4d/frames.json");
   int plys = 0;

@@ -197,8 +197,8 @@ TEST(TrainerTest, FlowPriorAloneTeachesTheBasesTheMotion) {
     const float y0 = trainer.scene().bases.translation(0, 0)[1];
     double error = 0;
     for (int t = 1; t < 4; ++t)
-      error += std::abs(trainer.scene().bases.translation(0, t)[1] - y0 -
-                        kStep * t);
+      error +=
+          std::abs(trainer.scene().bases.translation(0, t)[1] - y0 - kStep * t);
     return error / 3;
   };
   const double without = motion_error(views);  // no flows attached

@@ -29,8 +29,8 @@ TempDir::~TempDir() {
 
 SmallDisk::SmallDisk(int kib) {
   const std::string options = "size=" + std::to_string(kib) + "k";
-  mounted_ = ::mount("tmpfs", dir_.path().c_str(), "tmpfs", 0,
-                     options.c_str()) == 0;
+  mounted_ =
+      ::mount("tmpfs", dir_.path().c_str(), "tmpfs", 0, options.c_str()) == 0;
   if (!mounted_) {
     why_ = "mounting a " + std::to_string(kib) + " KiB tmpfs on " +
            dir_.path().string() + " failed (" + std::strerror(errno) +
