@@ -458,9 +458,6 @@ Expansion::StepSources Expansion::GatherSources(SceneEditor* fit, int e) {
     const TrainingView& v = views[sources_[s].view];
     out.rgb[s] = MatView(v.rgb, v.camera.height, v.camera.width, 3);
     out.depth[s] = SourceDepth(fit, v, options_.warp_depth, &rendered);
-  }
-  for (std::size_t s = 0; s < ns; ++s) {
-    const TrainingView& v = views[sources_[s].view];
     if (!v.dynamic.empty()) out.moving[s] = MovingMask(v);
   }
   return out;

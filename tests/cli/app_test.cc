@@ -88,18 +88,17 @@ TEST(CliTest, ANegativeSeedIsAUsageErrorNotAWrappedOne) {
   // empty folder, which is no workspace: not a usage error). Not the
   // source folder: a command that runs takes its workspace's lock there.
   testing::TempDir empty;
-  EXPECT_EQ(
-      RunCli({"fit", "--workspace", empty.path().string(), "--seed", "7"})
-          .status,
-      kExitError);
+  EXPECT_EQ(RunCli({"fit", "--workspace", empty.path().string(), "--seed", "7"})
+                .status,
+            kExitError);
 }
 
 // --threads, before or after the subcommand, sets the threads the parallel
 // loops use (bench reports them); a negative count is a usage error.
 TEST(CliTest, ThreadsSetsTheParallelLoopsThreads) {
   const std::vector<std::string> bench = {
-      "bench", "render", "--json", "--repeats", "1", "--gaussians", "100",
-      "--width", "32", "--height", "24"};
+      "bench", "render",  "--json", "--repeats", "1", "--gaussians",
+      "100",   "--width", "32",     "--height",  "24"};
   for (const bool after : {false, true}) {
     std::vector<std::string> args = bench;
     args.insert(after ? args.end() : args.begin(), {"--threads", "1"});
@@ -110,8 +109,9 @@ TEST(CliTest, ThreadsSetsTheParallelLoopsThreads) {
   EXPECT_EQ(RunCli({"--threads", "-2", "bench", "render"}).status, kExitUsage);
   // Back to one thread per core for the tests that follow.
   std::vector<std::string> all = bench;
-  all.insert(all.begin(), {"--threads", std::to_string(std::max(
-                              1u, std::thread::hardware_concurrency()))});
+  all.insert(all.begin(),
+             {"--threads", std::to_string(std::max(
+                               1u, std::thread::hardware_concurrency()))});
   EXPECT_EQ(RunCli(all).status, 0);
 }
 

@@ -115,8 +115,7 @@ TEST(RunRealDataTest, NvidiaBalloon1WithItsPriorsBeatsTheClassicalPath) {
       << Slurp(log);
   const nlohmann::json plan = ReadJson(ws / "pano4d/plan.json");
   EXPECT_EQ(plan["facts"]["priors"].size(), 2u) << plan["facts"].dump(2);
-  const nlohmann::json depth_report =
-      ReadJson(ws / "pano4d/depth/priors.json");
+  const nlohmann::json depth_report = ReadJson(ws / "pano4d/depth/priors.json");
   // The moving depth made consistent along the flow (the default).
   EXPECT_EQ(depth_report.at("moving_depth_pairs").size(), 11u);
   const nlohmann::json& learned = depth_report.at("frames");
