@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -38,66 +39,6 @@ namespace {
 
 const std::set<std::string> kImageExtensions = {".png", ".jpg", ".jpeg",
                                                 ".PNG", ".JPG", ".JPEG"};
-
-// A step's stamp: the inputs it ran with, written once its outputs are
-// complete. A later run skips the step when the stamp says the same inputs
-// (and every earlier step was skipped too); --force ignores stamps.
-class Stamps {
- public:
-  Stamps(fs::path dir, bool force) : dir_(std::move(dir)), force_(force) {}
-
-  // The seconds the step took when it completed with the same inputs, or
-  // nullopt when it must run (no stamp, other inputs, an earlier step ran,
-  // --force), with the reason in why_run().
-  std::optional<double> Done(const std::string& step,
-                             const nlohmann::json& inputs) {
-    if (force_) return Redo("--force");
-    if (redo_) return Redo("an earlier step ran");
-    std::ifstream in(dir_ / (step + ".done.json"));
-    const nlohmann::json stamp =
-        nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-    if (!stamp.is_object() ||
-        !stamp.value("seconds", nlohmann::json()).is_number())
-      return Redo("it has not completed in this workspace");
-    const nlohmann::json stamped = stamp.value("inputs", nlohmann::json());
-    if (!stamped.is_object()) return Redo("its stamp is unreadable");
-    // As stamp.h compares a stage's inputs: files said by name.
-    const auto as_stage = [](nlohmann::json in) {
-      nlohmann::json files = in.value("files", nlohmann::json::object());
-      in.erase("files");
-      return nlohmann::json{{"options", in}, {"files", files}};
-    };
-    if (const std::optional<std::string> why =
-            InputsDifference(as_stage(stamped), as_stage(inputs)))
-      return Redo(*why);
-    return stamp["seconds"].get<double>();
-  }
-  const std::string& why_run() const { return why_run_; }
-  void Mark(const std::string& step, const nlohmann::json& inputs,
-            double seconds) {
-    const nlohmann::json stamp = {{"inputs", inputs}, {"seconds", seconds}};
-    WriteFileAtomically(dir_ / (step + ".done.json"), stamp.dump(2) + "\n");
-    redo_ = true;  // everything after a step that ran runs again
-  }
-  void Clear(const std::string& step) {
-    fs::remove(dir_ / (step + ".done.json"));
-  }
-  void Invalidate(const std::string& why) {
-    redo_ = true;
-    why_run_ = why;
-  }
-
- private:
-  std::optional<double> Redo(const std::string& why) {
-    Invalidate(why);
-    return std::nullopt;
-  }
-
-  std::string why_run_;
-  fs::path dir_;
-  bool force_;
-  bool redo_ = false;
-};
 
 std::vector<fs::path> ListImages(const fs::path& dir) {
   if (!fs::is_directory(dir))
@@ -397,316 +338,393 @@ void SfmOptions::Check() const {
     throw Error("sfm", "--max-size", std::to_string(max_size), "must be >= 0");
 }
 
-SfmReport RunSfm(const SfmOptions& o) {
-  o.Check();
-  const ColmapRunner colmap(o.colmap);
-  const Workspace workspace(o.workspace);
-  const fs::path ws = workspace.root(), logs = workspace.logs();
-  const fs::path images_dir = workspace.images();
-  const fs::path masks_dir = workspace.colmap_masks();
-  const fs::path database = workspace.database(), sparse = workspace.sparse();
-  EnsureDirectory(logs);
-  Stamps stamps(logs, o.force);
-  SfmReport report;
-  nlohmann::json timings = nlohmann::json::object();
-  // Runs a step unless an earlier run completed it with the same inputs and
-  // its outputs are still there.
-  const auto step = [&](const std::string& name, const nlohmann::json& inputs,
-                        const std::function<bool()>& outputs_exist,
-                        const std::function<void()>& run) {
+namespace {
+
+// sfm's steps, in the order RunSfm takes them. Each runs unless its stamp
+// (src/core/stamp.h, WS/pano4d/stamps/sfm/<step>.json) says an earlier run
+// completed it with the same inputs and its outputs are still there; once
+// one step runs, every later one does too.
+class SfmSteps {
+ public:
+  explicit SfmSteps(const SfmOptions& o)
+      : o_(o),
+        colmap_(o.colmap),
+        ws_(o.workspace),
+        logs_(ws_.logs()),
+        images_(ws_.images()),
+        masks_(ws_.colmap_masks()),
+        database_(ws_.database()),
+        sparse_(ws_.sparse()),
+        known_(KeptKnownFrames(o)),
+        matcher_(!o.matcher.empty()
+                     ? o.matcher
+                     : (!o.video.empty() ? "sequential" : "exhaustive")) {
+    EnsureDirectory(logs_);
+  }
+
+  bool has_known_poses() const { return !known_.empty(); }
+
+  void WriteFramesStep();
+  void DynamicMasksStep();
+  void FeatureExtractorStep();
+  void MatcherStep();
+  void PointTriangulatorStep();
+  void MapperStep();
+  void RegisterLeftOutStep();
+  void UndistortStep();
+  SfmReport Summarize();
+
+ private:
+  void Step(const std::string& name, const StageRecord& record,
+            const std::function<void()>& run);
+  StageRecord Record() const { return StageRecord(ws_.root()); }
+  void AdoptOldStamp(const StageStamp& stamp, const StageRecord& record) const;
+  Error NothingPosed(const std::string& colmap_said) const;
+
+  const SfmOptions& o_;
+  const ColmapRunner colmap_;
+  const Workspace ws_;
+  const fs::path logs_, images_, masks_, database_, sparse_;
+  const std::vector<KnownFrame> known_;
+  const std::string matcher_;
+  std::vector<fs::path> frames_;
+  std::vector<std::string> frame_names_;  // in time order
+  std::map<std::string, double> moving_fraction_;
+  bool earlier_step_ran_ = false;
+  SfmReport report_;
+  nlohmann::json timings_ = nlohmann::json::object();
+};
+
+// A workspace from before the stamps moved kept each step's in
+// WS/pano4d/logs/<step>.done.json ({"inputs": options with "files",
+// "seconds"}): taken over once, so its steps are not run again.
+void SfmSteps::AdoptOldStamp(const StageStamp& stamp,
+                             const StageRecord& record) const {
+  const fs::path old = logs_ / (stamp.stage().substr(4) + ".done.json");
+  if (fs::exists(ws_.stamps() / (stamp.stage() + ".json")) || !fs::exists(old))
+    return;
+  const nlohmann::json was = nlohmann::json::parse(ReadTextFile(old), nullptr,
+                                                   /*allow_exceptions=*/false);
+  if (!was.is_object() || !was.value("inputs", nlohmann::json()).is_object())
+    return;
+  nlohmann::json inputs = was["inputs"];
+  const nlohmann::json files = inputs.value("files", nlohmann::json::object());
+  inputs.erase("files");
+  nlohmann::json adopted = record.json();
+  adopted["options"] = inputs;
+  adopted["files"] = files;
+  adopted["seconds"] = was.value("seconds", 0.0);
+  WriteFileAtomically(ws_.stamps() / (stamp.stage() + ".json"),
+                      adopted.dump(1) + "\n");
+  fs::remove(old);
+}
+
+void SfmSteps::Step(const std::string& name, const StageRecord& record,
+                    const std::function<void()>& run) {
+  const StageStamp stamp(ws_, "sfm/" + name);
+  AdoptOldStamp(stamp, record);
+  const std::optional<std::string> forced =
+      o_.force            ? std::optional<std::string>("--force")
+      : earlier_step_ran_ ? std::optional<std::string>("an earlier step ran")
+                          : std::nullopt;
+  const std::optional<std::string> why = stamp.Decide(record, forced);
+  const bool runs = why.has_value();
+  double seconds = stamp.Seconds();
+  if (runs) {
     Timer timer;
-    std::optional<double> earlier = stamps.Done(name, inputs);
-    if (earlier && !outputs_exist()) {
-      stamps.Invalidate("its outputs are gone");
-      earlier.reset();
-    }
-    if (earlier) {
-      PANO4D_LOG(kInfo) << "sfm: " << name << ": complete from an earlier run";
-    } else {
-      PANO4D_LOG(kInfo) << "sfm: " << name << " ... (" << stamps.why_run()
-                        << ")";
-      stamps.Clear(name);  // a step that fails half way leaves no stamp
-      run();
-      stamps.Mark(name, inputs, timer.WallSeconds());
-    }
-    const double seconds = earlier.value_or(timer.WallSeconds());
-    report.steps.push_back({name, seconds, earlier.has_value()});
-    timings[name] = {{"seconds", seconds}, {"skipped", earlier.has_value()}};
-  };
-  const auto exists = [](const fs::path& path) {
-    return [path] { return fs::exists(path); };
-  };
-
-  // 1. Frames.
-  const nlohmann::json frame_inputs = {
-      {"video", o.video.empty() ? "" : fs::absolute(o.video).string()},
-      {"images", o.images.empty() ? "" : fs::absolute(o.images).string()},
-      {"stride", o.stride},
-      {"max_frames", o.max_frames},
-      {"max_size", o.max_size},
-      {"known",
-       [&] {
-         nlohmann::json images = nlohmann::json::array();
-         for (const KnownFrame& f : o.known)
-           images.push_back(fs::absolute(f.image).string());
-         return images;
-       }()},
-      // What the frames are read from, by size and modification time: a
-      // frame replaced in the folder makes the step run again.
-      {"files", [&] {
-         StageInputs files(ws);
-         if (!o.video.empty()) files.File(o.video);
-         if (!o.images.empty()) files.File(o.images);
-         for (const KnownFrame& f : o.known) files.File(f.image);
-         return files.json()["files"];
-       }()}};
-  step("frames", frame_inputs, exists(images_dir),
-       [&] { WriteFrames(o, images_dir); });
-  std::vector<fs::path> frames = ListImages(images_dir);
-  report.frames = static_cast<int>(frames.size());
-  std::vector<std::string> frame_names;  // in time order
-  for (const fs::path& f : frames) frame_names.push_back(f.filename().string());
-
-  // 2. Dynamic masks (COLMAP's convention in WS/masks, pano4d's in
-  // WS/pano4d/tracks/dynamic).
-  if (o.dynamic_masks) {
-    step("dynamic_masks", {{"frames", report.frames}}, exists(masks_dir), [&] {
-      std::vector<cv::Mat> bgr;
-      std::vector<std::string> names;
-      for (const fs::path& f : frames) {
-        bgr.push_back(ReadImage(f).ToBgr8());
-        names.push_back(f.filename().string());
-      }
-      DynamicMaskStats stats;
-      const std::vector<cv::Mat> masks = ComputeDynamicMasks(bgr, {}, &stats);
-      fs::remove_all(masks_dir);
-      WriteColmapMasks(masks, names, masks_dir);
-      WriteDynamicMasks(masks, names, workspace.dynamic_masks());
-      PANO4D_LOG(kInfo) << "sfm: " << stats.BriefReport();
-    });
+    stamp.Remove();  // a step that fails half way leaves no stamp
+    run();
+    seconds = timer.WallSeconds();
+    stamp.Write(record, seconds);
+    earlier_step_ran_ = true;
   }
-  // Each frame's moving share, from the mask files (this run's or an
-  // earlier one's).
-  std::map<std::string, double> moving_fraction;
-  if (o.dynamic_masks) {
-    double sum = 0;
-    for (const fs::path& f : frames) {
-      const std::string name = f.filename().string();
-      const cv::Mat mask =
-          ReadMask(MaskPathFor(workspace.dynamic_masks(), name));
-      moving_fraction[name] =
-          cv::countNonZero(mask) / static_cast<double>(mask.total());
-      sum += moving_fraction[name];
-    }
-    report.mean_dynamic_fraction = sum / frames.size();
-  }
+  report_.steps.push_back({name, seconds, !runs, why.value_or("")});
+  timings_[name] = {{"seconds", seconds}, {"skipped", !runs}};
+}
 
-  // 3. Features (SIFT on the CPU), 4. matches, 5. mapper.
-  const std::string matcher =
-      !o.matcher.empty() ? o.matcher
-                         : (!o.video.empty() ? "sequential" : "exhaustive");
-  const std::vector<KnownFrame> known = KeptKnownFrames(o);
-  const bool known_shared = !known.empty() && SameCamera(known);
-  const std::string camera_model =
-      known.empty() ? o.camera_model
-                    : std::string(known.front().camera.camera.info().name);
-  const bool single_camera = known.empty() ? o.single_camera : known_shared;
-  const fs::path image_list = workspace.image_list();
-  step("feature_extractor",
-       {{"camera_model", camera_model},
-        {"single_camera", single_camera},
-        {"masks", o.dynamic_masks},
-        {"known", !known.empty()}},
-       exists(database), [&] {
-         fs::remove(database);
-         FeatureExtractorSettings settings;
-         settings.database = database;
-         settings.images = images_dir;
-         settings.camera_model = camera_model;
-         settings.single_camera = single_camera;
-         if (o.dynamic_masks) settings.masks = masks_dir;
-         if (!known.empty()) {
-           // The known frames only (the database maps them by name); the
-           // known camera where it is shared.
-           std::string list;
-           for (const KnownFrame& f : known) list += f.name + "\n";
-           WriteFileAtomically(image_list, list);
-           settings.image_list = image_list;
-           if (known_shared) {
-             for (const double p : known.front().camera.camera.params) {
-               char buffer[32];
-               std::snprintf(buffer, sizeof(buffer), "%.17g", p);
-               if (!settings.camera_params.empty())
-                 settings.camera_params += ',';
-               settings.camera_params += buffer;
-             }
-           }
-         }
-         colmap.Run("feature_extractor", FeatureExtractorArgs(settings),
-                    logs / "feature_extractor.log",
-                    "check that the frames are readable images");
-       });
-  if (matcher == "sequential") CheckSequentialOrder(database, frame_names);
-  step(matcher + "_matcher", {{"matcher", matcher}}, exists(database), [&] {
-    colmap.Run(matcher + "_matcher", MatcherArgs(database),
-               logs / (matcher + "_matcher.log"),
-               "out of memory on many images: use --matcher sequential");
+void SfmSteps::WriteFramesStep() {
+  StageRecord record = Record();
+  record
+      .Option("video", o_.video.empty() ? "" : fs::absolute(o_.video).string())
+      .Option("images",
+              o_.images.empty() ? "" : fs::absolute(o_.images).string())
+      .Option("stride", o_.stride)
+      .Option("max_frames", o_.max_frames)
+      .Option("max_size", o_.max_size);
+  nlohmann::json known = nlohmann::json::array();
+  for (const KnownFrame& f : o_.known)
+    known.push_back(fs::absolute(f.image).string());
+  record.Option("known", known);
+  // What the frames are read from: a frame replaced in the folder makes the
+  // step run again.
+  if (!o_.video.empty()) record.File(o_.video);
+  if (!o_.images.empty()) record.File(o_.images);
+  for (const KnownFrame& f : o_.known) record.File(f.image);
+  record.Output(images_);
+  Step("frames", record, [&] { WriteFrames(o_, images_); });
+  frames_ = ListImages(images_);
+  report_.frames = static_cast<int>(frames_.size());
+  for (const fs::path& f : frames_)
+    frame_names_.push_back(f.filename().string());
+}
+
+// COLMAP's convention in WS/masks, pano4d's in WS/pano4d/tracks/dynamic;
+// then each frame's moving share, from the mask files (this run's or an
+// earlier one's).
+void SfmSteps::DynamicMasksStep() {
+  if (!o_.dynamic_masks) return;
+  StageRecord record = Record();
+  record.Option("frames", report_.frames).Output(masks_);
+  Step("dynamic_masks", record, [&] {
+    std::vector<cv::Mat> bgr;
+    for (const fs::path& f : frames_) bgr.push_back(ReadImage(f).ToBgr8());
+    DynamicMaskStats stats;
+    const std::vector<cv::Mat> masks = ComputeDynamicMasks(bgr, {}, &stats);
+    fs::remove_all(masks_);
+    WriteColmapMasks(masks, frame_names_, masks_);
+    WriteDynamicMasks(masks, frame_names_, ws_.dynamic_masks());
+    PANO4D_LOG(kInfo) << "sfm: " << stats.BriefReport();
   });
-  if (!known.empty()) {
-    step(
-        "point_triangulator", {{"frames", report.frames}},
-        [&] { return DetectModelFormat(sparse / "0").has_value(); },
-        [&] {
-          const fs::path input = workspace.known_model();
-          fs::remove_all(input);
-          WriteModel(KnownModel(known, database), input, ColmapFormat::kText);
-          fs::remove_all(sparse);
-          EnsureDirectory(sparse / "0");
-          // The poses and intrinsics are given: only points are estimated.
-          colmap.Run(
-              "point_triangulator",
-              PointTriangulatorArgs(database, images_dir, input, sparse / "0"),
-              logs / "point_triangulator.log",
-              matcher == "exhaustive"
-                  ? "too few matches between frames with known poses, with "
-                    "every pair already matched: frames this small or this "
-                    "plain give too few features (a lower --factor keeps "
-                    "more pixels)"
-                  : "too few matches between frames with known poses: try "
-                    "--matcher exhaustive");
-        });
-  } else {
-    step(
-        "mapper", {{"frames", report.frames}, {"options", RelaxedMapperArgs()}},
-        [&] { return DetectModelFormat(sparse / "0").has_value(); },
-        [&] {
-          fs::remove_all(sparse);
-          EnsureDirectory(sparse);
-          // Nothing posed: the diagnosis says why, in place of a generic
-          // remedy.
-          const auto nothing_posed = [&](const std::string& colmap_said) {
-            const SfmDiagnosis d =
-                DiagnoseSfm(ReadFrameEvidence(database, {}, moving_fraction));
-            return Error(
-                "colmap", "mapper",
-                "0 of " + std::to_string(report.frames) + " frames posed",
-                "Cause: " + d.Cause() + ". To try: " + d.Remedy() + " (" +
-                    colmap_said + ")");
-          };
-          // A camera that only turns, or stands still: the rotation-only
-          // model instead.
-          const Image first = ReadImage(frames.front());
-          if (TryRotationOnlyModel(database, first.width(), first.height(),
-                                   sparse / "0"))
-            return;
-          try {
-            colmap.Run("mapper", MapperArgs(database, images_dir, sparse),
-                       logs / "mapper.log");
-          } catch (const Error& e) {
-            throw nothing_posed(e.problem());
-          }
-          if (SelectLargestModel(sparse) == 0) {
-            throw nothing_posed("colmap mapper wrote no model; log: " +
-                                (logs / "mapper.log").string());
-          }
-        });
-    // Frames the mapper left out, posed by PnP against its points; the
-    // log file says how many, for a later run that skips the step.
-    const fs::path left_out_json = logs / "register_left_out.json";
-    step(
-        "register_left_out", {{"frames", report.frames}},
-        [&] {
-          return fs::exists(left_out_json) &&
-                 DetectModelFormat(sparse / "0").has_value();
-        },
-        [&] {
-          ColmapModel model = ReadModel(sparse / "0");
-          const LeftOutReport left_out =
-              RegisterLeftOutFrames(database, &model);
-          if (!left_out.posed.empty()) {
-            // The whole model swapped in at once: a killed run leaves the
-            // mapper's model or this one, never a mixture.
-            const fs::path next = sparse / "0.left_out";
-            fs::remove_all(next);
-            WriteModel(model, next, ColmapFormat::kBinary);
-            fs::remove_all(sparse / "0");
-            fs::rename(next, sparse / "0");
-          }
-          WriteJson(left_out_json, {{"left_out", left_out.left_out},
-                                    {"posed", left_out.posed}});
-        });
-    report.posed_by_pnp = static_cast<int>(
-        GetJson<Json>(ReadJson(left_out_json), "posed", left_out_json.string())
-            .size());
+  double sum = 0;
+  for (const std::string& name : frame_names_) {
+    const cv::Mat mask = ReadMask(MaskPathFor(ws_.dynamic_masks(), name));
+    moving_fraction_[name] =
+        cv::countNonZero(mask) / static_cast<double>(mask.total());
+    sum += moving_fraction_[name];
   }
-  report.models = static_cast<int>(ModelFolders(sparse).size());
-  report.model = sparse / "0";
-  report.images = images_dir;
+  report_.mean_dynamic_fraction = sum / frames_.size();
+}
 
-  // 6. Undistortion, so that later stages see pinhole cameras.
-  const ColmapModel mapped = ReadModel(report.model);
+// SIFT on the CPU; with known poses, of the known frames only (the database
+// maps them by name) with the known camera where it is shared.
+void SfmSteps::FeatureExtractorStep() {
+  const bool known_shared = !known_.empty() && SameCamera(known_);
+  const std::string camera_model =
+      known_.empty() ? o_.camera_model
+                     : std::string(known_.front().camera.camera.info().name);
+  const bool single_camera = known_.empty() ? o_.single_camera : known_shared;
+  StageRecord record = Record();
+  record.Option("camera_model", camera_model)
+      .Option("single_camera", single_camera)
+      .Option("masks", o_.dynamic_masks)
+      .Option("known", !known_.empty())
+      .Output(database_);
+  Step("feature_extractor", record, [&] {
+    fs::remove(database_);
+    FeatureExtractorSettings settings;
+    settings.database = database_;
+    settings.images = images_;
+    settings.camera_model = camera_model;
+    settings.single_camera = single_camera;
+    if (o_.dynamic_masks) settings.masks = masks_;
+    if (!known_.empty()) {
+      std::string list;
+      for (const KnownFrame& f : known_) list += f.name + "\n";
+      WriteFileAtomically(ws_.image_list(), list);
+      settings.image_list = ws_.image_list();
+      if (known_shared) {
+        for (const double p : known_.front().camera.camera.params) {
+          char buffer[32];
+          std::snprintf(buffer, sizeof(buffer), "%.17g", p);
+          if (!settings.camera_params.empty()) settings.camera_params += ',';
+          settings.camera_params += buffer;
+        }
+      }
+    }
+    colmap_.Run("feature_extractor", FeatureExtractorArgs(settings),
+                logs_ / "feature_extractor.log",
+                "check that the frames are readable images");
+  });
+}
+
+void SfmSteps::MatcherStep() {
+  if (matcher_ == "sequential") CheckSequentialOrder(database_, frame_names_);
+  StageRecord record = Record();
+  record.Option("matcher", matcher_).Output(database_);
+  Step(matcher_ + "_matcher", record, [&] {
+    colmap_.Run(matcher_ + "_matcher", MatcherArgs(database_),
+                logs_ / (matcher_ + "_matcher.log"),
+                "out of memory on many images: use --matcher sequential");
+  });
+}
+
+// The poses and intrinsics are given: only points are estimated.
+void SfmSteps::PointTriangulatorStep() {
+  StageRecord record = Record();
+  record.Option("frames", report_.frames).Output(sparse_ / "0");
+  Step("point_triangulator", record, [&] {
+    const fs::path input = ws_.known_model();
+    fs::remove_all(input);
+    WriteModel(KnownModel(known_, database_), input, ColmapFormat::kText);
+    fs::remove_all(sparse_);
+    EnsureDirectory(sparse_ / "0");
+    colmap_.Run("point_triangulator",
+                PointTriangulatorArgs(database_, images_, input, sparse_ / "0"),
+                logs_ / "point_triangulator.log",
+                matcher_ == "exhaustive"
+                    ? "too few matches between frames with known poses, with "
+                      "every pair already matched: frames this small or this "
+                      "plain give too few features (a lower --factor keeps "
+                      "more pixels)"
+                    : "too few matches between frames with known poses: try "
+                      "--matcher exhaustive");
+  });
+}
+
+// Nothing posed: the diagnosis says why, in place of a generic remedy.
+Error SfmSteps::NothingPosed(const std::string& colmap_said) const {
+  const SfmDiagnosis d =
+      DiagnoseSfm(ReadFrameEvidence(database_, {}, moving_fraction_));
+  return Error("colmap", "mapper",
+               "0 of " + std::to_string(report_.frames) + " frames posed",
+               "Cause: " + d.Cause() + ". To try: " + d.Remedy() + " (" +
+                   colmap_said + ")");
+}
+
+// The largest model becomes WS/sparse/0; a camera that only turns, or
+// stands still, gets the rotation-only model instead.
+void SfmSteps::MapperStep() {
+  StageRecord record = Record();
+  record.Option("frames", report_.frames)
+      .Option("options", RelaxedMapperArgs())
+      .Output(sparse_ / "0");
+  Step("mapper", record, [&] {
+    fs::remove_all(sparse_);
+    EnsureDirectory(sparse_);
+    const Image first = ReadImage(frames_.front());
+    if (TryRotationOnlyModel(database_, first.width(), first.height(),
+                             sparse_ / "0"))
+      return;
+    try {
+      colmap_.Run("mapper", MapperArgs(database_, images_, sparse_),
+                  logs_ / "mapper.log");
+    } catch (const Error& e) {
+      throw NothingPosed(e.problem());
+    }
+    if (SelectLargestModel(sparse_) == 0) {
+      throw NothingPosed("colmap mapper wrote no model; log: " +
+                         (logs_ / "mapper.log").string());
+    }
+  });
+}
+
+// Frames the mapper left out, posed by PnP against its points; the log
+// file says how many, for a later run that skips the step.
+void SfmSteps::RegisterLeftOutStep() {
+  const fs::path left_out_json = logs_ / "register_left_out.json";
+  StageRecord record = Record();
+  record.Option("frames", report_.frames)
+      .Output(left_out_json)
+      .Output(sparse_ / "0");
+  Step("register_left_out", record, [&] {
+    ColmapModel model = ReadModel(sparse_ / "0");
+    const LeftOutReport left_out = RegisterLeftOutFrames(database_, &model);
+    if (!left_out.posed.empty()) {
+      // The whole model swapped in at once: a killed run leaves the
+      // mapper's model or this one, never a mixture.
+      const fs::path next = sparse_ / "0.left_out";
+      fs::remove_all(next);
+      WriteModel(model, next, ColmapFormat::kBinary);
+      fs::remove_all(sparse_ / "0");
+      fs::rename(next, sparse_ / "0");
+    }
+    WriteJson(left_out_json,
+              {{"left_out", left_out.left_out}, {"posed", left_out.posed}});
+  });
+  report_.posed_by_pnp = static_cast<int>(
+      GetJson<Json>(ReadJson(left_out_json), "posed", left_out_json.string())
+          .size());
+}
+
+// Undistortion, so that later stages see pinhole cameras.
+void SfmSteps::UndistortStep() {
+  report_.models = static_cast<int>(ModelFolders(sparse_).size());
+  report_.model = sparse_ / "0";
+  report_.images = images_;
+  const ColmapModel mapped = ReadModel(report_.model);
   const bool distorted = std::any_of(
       mapped.cameras.begin(), mapped.cameras.end(), [](const ColmapCamera& c) {
         return c.model_id != static_cast<int>(CameraModelId::kSimplePinhole) &&
                c.model_id != static_cast<int>(CameraModelId::kPinhole);
       });
-  if (distorted) {
-    const fs::path out = workspace.undistorted();
-    step(
-        "image_undistorter", {{"model_images", mapped.images.size()}},
-        [&] { return DetectModelFormat(out / "sparse").has_value(); },
-        [&] {
-          fs::remove_all(out);
-          colmap.Run("image_undistorter",
-                     ImageUndistorterArgs(images_dir, report.model, out),
-                     logs / "image_undistorter.log",
-                     "check free disk space in the workspace");
-        });
-    report.model = out / "sparse";
-    report.images = out / "images";
-  }
+  if (!distorted) return;
+  const fs::path out = ws_.undistorted();
+  StageRecord record = Record();
+  record.Option("model_images", mapped.images.size()).Output(out / "sparse");
+  Step("image_undistorter", record, [&] {
+    fs::remove_all(out);
+    colmap_.Run("image_undistorter",
+                ImageUndistorterArgs(images_, report_.model, out),
+                logs_ / "image_undistorter.log",
+                "check free disk space in the workspace");
+  });
+  report_.model = out / "sparse";
+  report_.images = out / "images";
+}
 
-  const ColmapModel model = ReadModel(report.model);
-  report.rotation_only = IsRotationOnly(model);
-  report.static_camera = IsStaticCamera(model);
-  report.registered = static_cast<int>(model.images.size());
-  report.points3D = static_cast<int>(model.points3D.size());
+// The model's figures and the diagnosis, into the report and
+// WS/pano4d/sfm.json.
+SfmReport SfmSteps::Summarize() {
+  const ColmapModel model = ReadModel(report_.model);
+  report_.rotation_only = IsRotationOnly(model);
+  report_.static_camera = IsStaticCamera(model);
+  report_.registered = static_cast<int>(model.images.size());
+  report_.points3D = static_cast<int>(model.points3D.size());
   double error_sum = 0;
   for (const ColmapPoint3D& p : model.points3D) error_sum += p.error;
-  report.mean_reprojection_error =
+  report_.mean_reprojection_error =
       model.points3D.empty() ? 0.0 : error_sum / model.points3D.size();
   std::set<std::string> posed;
   for (const ColmapImage& image : model.images) posed.insert(image.name);
-  report.diagnosis =
-      DiagnoseSfm(ReadFrameEvidence(database, posed, moving_fraction));
+  report_.diagnosis =
+      DiagnoseSfm(ReadFrameEvidence(database_, posed, moving_fraction_));
   // Frames the database lacks (never imported) are unposed too.
-  report.diagnosis.frames = std::max(report.diagnosis.frames, report.frames);
+  report_.diagnosis.frames = std::max(report_.diagnosis.frames, report_.frames);
 
-  nlohmann::json summary = {
-      {"frames", report.frames},
-      {"registered", report.registered},
-      {"posed_by_pnp", report.posed_by_pnp},
-      {"posed_fraction", report.diagnosis.PosedFraction()},
-      {"camera_motion", report.CameraMotion()},
-      {"diagnosis", report.diagnosis.ToJson()},
-      {"points3D", report.points3D},
-      {"mean_reprojection_error_px", report.mean_reprojection_error},
-      {"models", report.models},
-      {"model", fs::relative(report.model, ws).string()},
-      {"images", fs::relative(report.images, ws).string()},
-      {"camera_model", o.camera_model},
-      {"matcher", matcher},
-      {"dynamic_masks", o.dynamic_masks},
-      {"mean_dynamic_fraction", report.mean_dynamic_fraction},
-      {"options", o.ToJson()}};
+  const fs::path ws = ws_.root();
+  const nlohmann::json summary = {
+      {"frames", report_.frames},
+      {"registered", report_.registered},
+      {"posed_by_pnp", report_.posed_by_pnp},
+      {"posed_fraction", report_.diagnosis.PosedFraction()},
+      {"camera_motion", report_.CameraMotion()},
+      {"diagnosis", report_.diagnosis.ToJson()},
+      {"points3D", report_.points3D},
+      {"mean_reprojection_error_px", report_.mean_reprojection_error},
+      {"models", report_.models},
+      {"model", fs::relative(report_.model, ws).string()},
+      {"images", fs::relative(report_.images, ws).string()},
+      {"camera_model", o_.camera_model},
+      {"matcher", matcher_},
+      {"dynamic_masks", o_.dynamic_masks},
+      {"mean_dynamic_fraction", report_.mean_dynamic_fraction},
+      {"options", o_.ToJson()}};
   // Rewritten only when it says something new: the depth stage's stamp
   // records its modification time.
   const std::string text = summary.dump(2) + "\n";
-  if (!fs::exists(workspace.sfm_json()) ||
-      ReadTextFile(workspace.sfm_json()) != text)
-    WriteFileAtomically(workspace.sfm_json(), text);
-  WriteFileAtomically(logs / "timings.json", timings.dump(2) + "\n");
-  return report;
+  if (!fs::exists(ws_.sfm_json()) || ReadTextFile(ws_.sfm_json()) != text)
+    WriteFileAtomically(ws_.sfm_json(), text);
+  WriteFileAtomically(logs_ / "timings.json", timings_.dump(2) + "\n");
+  return report_;
+}
+
+}  // namespace
+
+SfmReport RunSfm(const SfmOptions& o) {
+  o.Check();
+  SfmSteps steps(o);
+  steps.WriteFramesStep();
+  steps.DynamicMasksStep();
+  steps.FeatureExtractorStep();
+  steps.MatcherStep();
+  if (steps.has_known_poses()) {
+    steps.PointTriangulatorStep();
+  } else {
+    steps.MapperStep();
+    steps.RegisterLeftOutStep();
+  }
+  steps.UndistortStep();
+  return steps.Summarize();
 }
 
 }  // namespace pano4d

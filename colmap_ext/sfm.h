@@ -54,6 +54,7 @@ struct SfmStepReport {
   std::string step;
   double seconds = 0.0;
   bool skipped = false;  // outputs were complete from an earlier run
+  std::string why;       // why it ran (StageStamp::Decide); empty if skipped
 };
 
 struct SfmReport {

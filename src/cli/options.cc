@@ -73,7 +73,7 @@ void RefuseNonFiniteAndEmptyValues(CLI::App* app) {
 }
 
 void AddTrainerOptions(CLI::App* app, TrainerOptions* o) {
-  app->add_option("--max-gaussians", o->max_gaussians,
+  app->add_option("--max-gaussians", o->strategy.max_gaussians,
                   "Densification stops adding Gaussians at this count")
       ->capture_default_str();
   app->add_option("--smoothness-weight", o->smoothness_weight,

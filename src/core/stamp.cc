@@ -5,6 +5,7 @@
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/json.h"
+#include "src/core/log.h"
 
 namespace pano4d {
 namespace fs = std::filesystem;
@@ -22,22 +23,28 @@ nlohmann::json Facts(const fs::path& file) {
                                .count())}};
 }
 
+nlohmann::json Section(const nlohmann::json& record, const char* key) {
+  return record.is_object() ? record.value(key, nlohmann::json::object())
+                            : nlohmann::json::object();
+}
+
 }  // namespace
 
-StageInputs& StageInputs::Option(const std::string& key, nlohmann::json value) {
+std::string StageRecord::Key(const fs::path& p) const {
+  const fs::path absolute = fs::absolute(p).lexically_normal();
+  const fs::path relative =
+      absolute.lexically_relative(fs::absolute(root_).lexically_normal());
+  const bool inside =
+      !root_.empty() && !relative.empty() && *relative.begin() != "..";
+  return (inside ? relative : absolute).generic_string();
+}
+
+StageRecord& StageRecord::Option(const std::string& key, nlohmann::json value) {
   json_["options"][key] = std::move(value);
   return *this;
 }
 
-StageInputs& StageInputs::File(const fs::path& path) {
-  const auto key = [&](const fs::path& p) {
-    const fs::path absolute = fs::absolute(p).lexically_normal();
-    const fs::path relative =
-        absolute.lexically_relative(fs::absolute(root_).lexically_normal());
-    const bool inside =
-        !root_.empty() && !relative.empty() && *relative.begin() != "..";
-    return (inside ? relative : absolute).generic_string();
-  };
+StageRecord& StageRecord::File(const fs::path& path) {
   nlohmann::json& files = json_["files"];
   std::error_code ec;
   // A workspace inside the folder (a dataset's) is not its input, nor are
@@ -54,49 +61,98 @@ StageInputs& StageInputs::File(const fs::path& path) {
       if (it->is_directory(ec)) {
         if (skipped(it->path())) it.disable_recursion_pending();
       } else if (it->is_regular_file(ec)) {
-        files[key(it->path())] = Facts(it->path());
+        files[Key(it->path())] = Facts(it->path());
       }
     }
     if (ec) throw Error::In(path.string(), "cannot be listed: " + ec.message());
   } else {
-    files[key(path)] = fs::exists(path, ec) ? Facts(path) : nullptr;
+    files[Key(path)] = fs::exists(path, ec) ? Facts(path) : nullptr;
   }
   return *this;
 }
 
-std::optional<std::string> InputsDifference(const nlohmann::json& stamped,
+StageRecord& StageRecord::Content(const std::string& name,
+                                  const std::string& fingerprint) {
+  json_["contents"][name] = fingerprint;
+  return *this;
+}
+
+StageRecord& StageRecord::Output(const fs::path& path) {
+  json_["outputs"].push_back(Key(path));
+  return *this;
+}
+
+std::optional<std::string> RecordDifference(const nlohmann::json& stamped,
                                             const nlohmann::json& now) {
-  const nlohmann::json options = stamped.value("options", nlohmann::json());
-  if (const std::optional<JsonDifference> d =
-          FirstDifference(options, now.at("options"))) {
+  if (const std::optional<JsonDifference> d = FirstDifference(
+          Section(stamped, "options"), Section(now, "options"))) {
     return "option " + d->path + " was " + JsonValueForMessage(d->first) +
            ", now " + JsonValueForMessage(d->second);
   }
-  const nlohmann::json before = stamped.value("files", nlohmann::json());
-  if (!before.is_object()) return std::string("the stamp lists no files");
-  for (const auto& [name, facts] : now.at("files").items()) {
+  const nlohmann::json before = Section(stamped, "files");
+  const nlohmann::json after = Section(now, "files");
+  for (const auto& [name, facts] : after.items()) {
     if (!before.contains(name)) return name + " is new";
     if (before[name] == facts) continue;
     if (facts.is_null()) return name + " is gone";
     return name + " changed";
   }
   for (const auto& [name, facts] : before.items()) {
-    if (!now["files"].contains(name)) return name + " is gone";
+    if (!after.contains(name)) return name + " is gone";
+  }
+  const nlohmann::json held = Section(stamped, "contents");
+  const nlohmann::json contents = Section(now, "contents");
+  for (const auto& [name, fingerprint] : contents.items()) {
+    if (held.value(name, nlohmann::json()) != fingerprint)
+      return name + " changed";
   }
   return std::nullopt;
 }
 
 StageStamp::StageStamp(const Workspace& workspace, std::string stage)
-    : path_(workspace.stamps() / (stage + ".json")) {}
+    : stage_(std::move(stage)),
+      root_(workspace.root()),
+      path_(workspace.stamps() / (stage_ + ".json")) {}
 
 std::optional<std::string> StageStamp::StaleReason(
-    const StageInputs& inputs) const {
+    const StageRecord& now) const {
   if (!fs::exists(path_))
     return "no stamp: it has not completed in this workspace";
   const nlohmann::json stamp = nlohmann::json::parse(
       ReadTextFile(path_), nullptr, /*allow_exceptions=*/false);
   if (!stamp.is_object()) return path_.string() + " is not a stamp";
-  return InputsDifference(stamp, inputs.json());
+  if (std::optional<std::string> why = RecordDifference(stamp, now.json()))
+    return why;
+  const nlohmann::json outputs = stamp.value("outputs", nlohmann::json());
+  if (!outputs.is_array()) return std::nullopt;
+  for (const nlohmann::json& output : outputs) {
+    if (!output.is_string()) return path_.string() + " is not a stamp";
+    const fs::path path(output.get<std::string>());
+    std::error_code ec;
+    if (!fs::exists(path.is_absolute() ? path : root_ / path, ec))
+      return "its output " + output.get<std::string>() + " is gone";
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> StageStamp::Decide(
+    const StageRecord& now, const std::optional<std::string>& forced) const {
+  const std::optional<std::string> why = forced ? forced : StaleReason(now);
+  if (why)
+    PANO4D_LOG(kInfo) << stage_ << " runs: " << *why;
+  else
+    PANO4D_LOG(kInfo) << stage_ << " reused: nothing it read changed";
+  return why;
+}
+
+double StageStamp::Seconds() const {
+  std::error_code ec;
+  if (!fs::exists(path_, ec)) return 0;
+  const nlohmann::json stamp = nlohmann::json::parse(
+      ReadTextFile(path_), nullptr, /*allow_exceptions=*/false);
+  if (!stamp.is_object()) return 0;
+  const nlohmann::json seconds = stamp.value("seconds", nlohmann::json());
+  return seconds.is_number() ? seconds.get<double>() : 0.0;
 }
 
 void StageStamp::Remove() const {
@@ -105,8 +161,10 @@ void StageStamp::Remove() const {
   if (ec) throw Error::In(path_.string(), "cannot be removed: " + ec.message());
 }
 
-void StageStamp::Write(const StageInputs& inputs) const {
-  WriteFileAtomically(path_, inputs.json().dump(1) + "\n");
+void StageStamp::Write(const StageRecord& record, double seconds) const {
+  nlohmann::json stamp = record.json();
+  stamp["seconds"] = seconds;
+  WriteFileAtomically(path_, stamp.dump(1) + "\n");
 }
 
 }  // namespace pano4d

@@ -1,7 +1,6 @@
 #include "src/gs/init.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <optional>
@@ -16,6 +15,7 @@
 #include "src/core/log.h"
 #include "src/core/median.h"
 #include "src/core/option_checks.h"
+#include "src/core/timer.h"
 #include "src/geometry/inpaint.h"
 #include "src/render/sh.h"
 
@@ -42,12 +42,6 @@ constexpr double kInpaintRadius = 5.0;
 // 240 x 180), narrow enough that a far-away object of the same mask does
 // not lend its width.
 constexpr int kHalfWidthWindow = 15;
-
-Eigen::Vector3f Unproject(const RasterCamera& cam, float u, float v, float z) {
-  const Eigen::Vector3f xc((u - cam.cx) / cam.fx * z, (v - cam.cy) / cam.fy * z,
-                           z);
-  return cam.rotation.transpose() * (xc - cam.translation);
-}
 
 // Depth under a continuous pixel position (nearest pixel); 0 outside.
 float DepthAt(const std::vector<float>& depth, const RasterCamera& camera,
@@ -269,15 +263,12 @@ std::string InitReport::Brief() const {
   return s.str();
 }
 
-GaussianScene InitializeScene(const std::vector<TrainingView>& views,
-                              int num_times, const InitOptions& o,
-                              std::uint64_t seed, InitReport* report_out,
-                              const Tracks2D* given) {
-  o.Check();
-  const auto start = std::chrono::steady_clock::now();
-  InitReport report;
-  if (views.empty()) throw Error("init", "views", "0", "no training views");
+namespace {
 
+// The voxel of the point cloud filter: voxel_pixels pixels of the median
+// focal length at the median depth. Throws pano4d::Error when no view has
+// depth.
+double VoxelSize(const std::vector<TrainingView>& views, const InitOptions& o) {
   std::vector<double> depths, focals;
   for (const TrainingView& v : views) {
     if (v.depth.empty()) {
@@ -294,16 +285,22 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
                 "no training view has depth; run "
                 "`pano4d depth` first");
   }
-  const double voxel =
-      UpperMedian(depths) * o.voxel_pixels / UpperMedian(focals);
-  report.voxel_size = voxel;
+  return UpperMedian(depths) * o.voxel_pixels / UpperMedian(focals);
+}
 
-  // The canonical time: the middle of the dynamic content's time range.
-  bool any_dynamic = false;
+// Whether any view with depth has moving pixels (and motion is asked for).
+bool AnyDynamic(const std::vector<TrainingView>& views, const InitOptions& o) {
+  bool any = false;
   for (const TrainingView& v : views) {
     if (o.num_bases == 0 || v.depth.empty()) continue;
-    for (std::uint8_t d : v.dynamic) any_dynamic |= d != 0;
+    for (std::uint8_t d : v.dynamic) any |= d != 0;
   }
+  return any;
+}
+
+// The canonical time: the middle of the dynamic content's time range.
+int CanonicalTime(const std::vector<TrainingView>& views, int num_times,
+                  bool any_dynamic) {
   int canonical = num_times / 2;
   if (any_dynamic) {
     int best = -1;
@@ -315,15 +312,16 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
     }
     canonical = best;
   }
-  canonical = std::clamp(canonical, 0, num_times - 1);
-  report.canonical_time = canonical;
+  return std::clamp(canonical, 0, num_times - 1);
+}
 
-  std::vector<std::vector<float>> motion_depth(views.size());
-  if (any_dynamic) {
-    for (std::size_t i = 0; i < views.size(); ++i)
-      motion_depth[i] = DepthForMotion(views[i]);
-  }
-  PointCloud statics, dynamics;
+// Every view's static pixels on the pixel_stride grid, and the canonical
+// time's moving pixels, each with dynamic_layers more points inside the
+// object along its ray, as points in the colour of their pixel.
+void UnprojectViews(const std::vector<TrainingView>& views,
+                    const std::vector<std::vector<float>>& motion_depth,
+                    int canonical, bool any_dynamic, const InitOptions& o,
+                    PointCloud* statics, PointCloud* dynamics) {
   for (std::size_t vi = 0; vi < views.size(); ++vi) {
     const TrainingView& v = views[vi];
     if (v.depth.empty()) continue;
@@ -336,15 +334,14 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const std::size_t p = static_cast<std::size_t>(y) * w + x;
-        const bool moving = any_dynamic && !v.dynamic.empty() && v.dynamic[p];
-        const float z = moving ? motion_depth[vi][p] : v.depth[p];
-        if (!(z > 0)) continue;
         const bool dynamic = any_dynamic && !v.dynamic.empty() && v.dynamic[p];
+        const float z = dynamic ? motion_depth[vi][p] : v.depth[p];
+        if (!(z > 0)) continue;
         const bool on_grid = x % o.pixel_stride == 0 && y % o.pixel_stride == 0;
         if (dynamic && !is_canonical) continue;
         if (!dynamic && !on_grid) continue;
-        PointCloud& cloud = dynamic ? dynamics : statics;
-        cloud.points.push_back(Unproject(v.camera, x + 0.5f, y + 0.5f, z));
+        PointCloud& cloud = dynamic ? *dynamics : *statics;
+        cloud.points.push_back(v.camera.Unproject(x + 0.5f, y + 0.5f, z));
         cloud.colors.emplace_back(v.rgb[p * 3], v.rgb[p * 3 + 1],
                                   v.rgb[p * 3 + 2]);
         if (!dynamic || chord.empty()) continue;
@@ -353,14 +350,304 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
             o.dynamic_thickness * chord.at<float>(y, x) * z / v.camera.fx);
         const Eigen::Vector3f colour = cloud.colors.back();
         for (int k = 1; k <= o.dynamic_layers; ++k) {
-          cloud.points.push_back(Unproject(
-              v.camera, x + 0.5f, y + 0.5f,
+          cloud.points.push_back(v.camera.Unproject(
+              x + 0.5f, y + 0.5f,
               z + depth_extent * static_cast<float>(k) / o.dynamic_layers));
           cloud.colors.push_back(colour);
         }
       }
     }
   }
+}
+
+// The views by time: the first of each time, and at the canonical time the
+// first with depth and moving pixels (the tracks' reference), with the
+// depth the tracks are lifted with.
+struct ViewsByTime {
+  const TrainingView* reference = nullptr;
+  std::vector<const TrainingView*> view;
+  std::vector<const std::vector<float>*> depth;
+};
+
+ViewsByTime IndexByTime(const std::vector<TrainingView>& views,
+                        const std::vector<std::vector<float>>& motion_depth,
+                        int num_times, int canonical) {
+  ViewsByTime index;
+  index.view.assign(num_times, nullptr);
+  index.depth.assign(num_times, nullptr);
+  for (std::size_t vi = 0; vi < views.size(); ++vi) {
+    const TrainingView& v = views[vi];
+    if (!index.view[v.time]) {
+      index.view[v.time] = &v;
+      index.depth[v.time] = &motion_depth[vi];
+    }
+    if (v.time == canonical && !v.depth.empty() && !v.dynamic.empty() &&
+        !index.reference) {
+      index.reference = &v;
+      index.depth[canonical] = &motion_depth[vi];
+    }
+  }
+  index.view[canonical] = index.reference;
+  return index;
+}
+
+// 2D tracks through the canonical frame's moving pixels with depth: the
+// tracker's (`given`) where it has at least kMinGivenTracks of them, else
+// chained along the views' optical flow from seeds every track_stride
+// pixels.
+Tracks2D CanonicalTracks(const std::vector<TrainingView>& views,
+                         const ViewsByTime& index, int num_times, int canonical,
+                         const InitOptions& o, const Tracks2D* given,
+                         std::string* track_flow) {
+  const TrainingView* ref = index.reference;
+  const std::vector<float>& depth = *index.depth[canonical];
+  const int w = ref->camera.width, h = ref->camera.height;
+  Tracks2D tracks;
+  if (given && given->num_times == num_times) {
+    tracks.num_times = num_times;
+    tracks.reference_time = canonical;
+    for (std::size_t k = 0; k < given->size(); ++k) {
+      if (!given->is_valid(k, canonical)) continue;
+      const Eigen::Vector2f& p = given->pixel(k, canonical);
+      const int x = static_cast<int>(std::floor(p.x()));
+      const int y = static_cast<int>(std::floor(p.y()));
+      if (x < 0 || y < 0 || x >= w || y >= h) continue;
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (!ref->dynamic[i] || !(depth[i] > 0)) continue;
+      for (int t = 0; t < num_times; ++t) {
+        tracks.pixels.push_back(given->pixel(k, t));
+        tracks.valid.push_back(given->valid[k * num_times + t]);
+      }
+    }
+    *track_flow = "tracker";
+  }
+  if (static_cast<int>(tracks.size()) >= kMinGivenTracks) return tracks;
+  std::vector<cv::Mat> frames(num_times);
+  for (int t = 0; t < num_times; ++t) {
+    const TrainingView* v = index.view[t];
+    if (!v || v->camera.width != w || v->camera.height != h) continue;
+    frames[t] = MatView(v->rgb, v->camera.height, v->camera.width, 3);
+  }
+  std::vector<Eigen::Vector2f> seeds;
+  for (int y = 0; y < h; y += o.track_stride)
+    for (int x = 0; x < w; x += o.track_stride)
+      if (ref->dynamic[static_cast<std::size_t>(y) * w + x] &&
+          depth[static_cast<std::size_t>(y) * w + x] > 0)
+        seeds.emplace_back(x + 0.5f, y + 0.5f);
+  return ChainTracksAlongViews(views, index.view, frames, canonical, seeds,
+                               o.tracks, track_flow);
+}
+
+// The tracks lifted to 3D: X(t) for every valid (track, time) with depth.
+struct LiftedTracks {
+  std::size_t count = 0;
+  int num_times = 0;
+  std::vector<Eigen::Vector3f> points;  // count x num_times
+  std::vector<std::uint8_t> ok;         // count x num_times
+  std::int64_t valid = 0;
+  const Eigen::Vector3f& at(std::size_t i, int t) const {
+    return points[i * num_times + t];
+  }
+  bool has(std::size_t i, int t) const { return ok[i * num_times + t]; }
+};
+
+LiftedTracks Lift(const Tracks2D& tracks, const ViewsByTime& index,
+                  int num_times) {
+  LiftedTracks l;
+  l.count = tracks.size();
+  l.num_times = num_times;
+  l.points.assign(l.count * num_times, Eigen::Vector3f::Zero());
+  l.ok.assign(l.count * num_times, 0);
+  for (std::size_t i = 0; i < l.count; ++i) {
+    for (int t = 0; t < num_times; ++t) {
+      if (!tracks.is_valid(i, t) || !index.view[t]) continue;
+      const Eigen::Vector2f& p = tracks.pixel(i, t);
+      if (index.depth[t]->empty()) continue;
+      const float z = DepthAt(*index.depth[t], index.view[t]->camera, p);
+      if (!(z > 0)) continue;
+      l.points[i * num_times + t] =
+          index.view[t]->camera.Unproject(p.x(), p.y(), z);
+      l.ok[i * num_times + t] = 1;
+      ++l.valid;
+    }
+  }
+  return l;
+}
+
+// k-means on displacement trajectories X(t) - X(canonical), gaps filled
+// from the nearest valid time: each track's cluster.
+std::vector<int> ClusterTrajectories(const LiftedTracks& l, int k,
+                                     int canonical, std::uint64_t seed) {
+  const std::size_t n = l.count;
+  const int num_times = l.num_times;
+  std::vector<int> labels(n, 0);
+  if (n < 2 || k <= 1) return labels;
+  cv::Mat features(static_cast<int>(n), num_times * 3, CV_32F);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f origin = l.at(i, canonical);
+    for (int t = 0; t < num_times; ++t) {
+      int nearest = canonical;
+      for (int d = 0; d < num_times; ++d) {
+        if (t - d >= 0 && l.has(i, t - d)) {
+          nearest = t - d;
+          break;
+        }
+        if (t + d < num_times && l.has(i, t + d)) {
+          nearest = t + d;
+          break;
+        }
+      }
+      const Eigen::Vector3f disp = l.at(i, nearest) - origin;
+      for (int c = 0; c < 3; ++c)
+        features.at<float>(static_cast<int>(i), t * 3 + c) = disp[c];
+    }
+  }
+  cv::Mat label_mat, centres;
+  cv::theRNG().state = seed + 1;  // cv::kmeans draws from OpenCV's RNG
+  cv::kmeans(features, k, label_mat,
+             cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
+                              50, 1e-6),
+             3, cv::KMEANS_PP_CENTERS, centres);
+  for (std::size_t i = 0; i < n; ++i)
+    labels[i] = label_mat.at<int>(static_cast<int>(i));
+  return labels;
+}
+
+// The rigid motion from the canonical time to t of the `members` tracks
+// (Procrustes, robust by one refit on the inliers); nullopt when it is not
+// finite.
+std::optional<Eigen::Matrix4d> FitRigidMotion(const LiftedTracks& l,
+                                              std::vector<std::size_t> members,
+                                              int canonical, int t,
+                                              const InitOptions& o) {
+  Eigen::Matrix4d transform = Eigen::Matrix4d::Identity();
+  for (int pass = 0; pass < 2; ++pass) {
+    Eigen::Matrix3Xd src(3, members.size()), dst(3, members.size());
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      src.col(j) = l.at(members[j], canonical).cast<double>();
+      dst.col(j) = l.at(members[j], t).cast<double>();
+    }
+    transform = Eigen::umeyama(src, dst, false);
+    if (pass == 1) break;
+    std::vector<double> residual(members.size());
+    for (std::size_t j = 0; j < members.size(); ++j)
+      residual[j] = (transform.topLeftCorner<3, 3>() * src.col(j) +
+                     transform.topRightCorner<3, 1>() - dst.col(j))
+                        .norm();
+    const double limit = kInlierFactor * UpperMedian(residual) + 1e-12;
+    std::vector<std::size_t> inliers;
+    for (std::size_t j = 0; j < members.size(); ++j)
+      if (residual[j] <= limit) inliers.push_back(members[j]);
+    if (static_cast<int>(inliers.size()) < o.min_tracks_per_fit) break;
+    members.swap(inliers);
+  }
+  if (!transform.allFinite()) return std::nullopt;
+  return transform;
+}
+
+// One rigid motion per cluster and time; times without enough tracks copy
+// the nearest fitted time.
+void FitBases(const LiftedTracks& l, const std::vector<int>& labels, int k,
+              int canonical, const InitOptions& o, MotionBases* bases) {
+  const int num_times = l.num_times;
+  bases->Reset(k, num_times);
+  for (int c = 0; c < k; ++c) {
+    std::vector<std::uint8_t> fitted(num_times, 0);
+    fitted[canonical] = 1;  // the identity, by definition of canonical
+    for (int t = 0; t < num_times; ++t) {
+      if (t == canonical) continue;
+      std::vector<std::size_t> members;
+      for (std::size_t i = 0; i < l.count; ++i)
+        if (labels[i] == c && l.has(i, t) && l.has(i, canonical))
+          members.push_back(i);
+      if (static_cast<int>(members.size()) < o.min_tracks_per_fit) continue;
+      const std::optional<Eigen::Matrix4d> transform =
+          FitRigidMotion(l, std::move(members), canonical, t, o);
+      if (!transform) continue;
+      Eigen::Quaterniond q(Eigen::Matrix3d(transform->topLeftCorner<3, 3>()));
+      if (q.w() < 0) q.coeffs() *= -1;  // the identity's hemisphere
+      float* r = bases->rotation(c, t);
+      r[0] = static_cast<float>(q.w());
+      r[1] = static_cast<float>(q.x());
+      r[2] = static_cast<float>(q.y());
+      r[3] = static_cast<float>(q.z());
+      float* tr = bases->translation(c, t);
+      for (int j = 0; j < 3; ++j)
+        tr[j] = static_cast<float>((*transform)(j, 3));
+      fitted[t] = 1;
+    }
+    for (int t = 0; t < num_times; ++t) {
+      if (fitted[t]) continue;
+      for (int d = 1; d < num_times; ++d) {
+        const int s = t - d >= 0 && fitted[t - d]          ? t - d
+                      : t + d < num_times && fitted[t + d] ? t + d
+                                                           : -1;
+        if (s < 0) continue;
+        std::copy_n(bases->rotation(c, s), 4, bases->rotation(c, t));
+        std::copy_n(bases->translation(c, s), 3, bases->translation(c, t));
+        break;
+      }
+    }
+  }
+}
+
+// Each dynamic Gaussian's basis weights: the clusters of the kVotingTracks
+// nearest tracks at the canonical time.
+void VoteWeights(const LiftedTracks& l, const std::vector<int>& labels, int k,
+                 int canonical, GaussianScene* scene) {
+  const std::size_t nd = scene->dynamics.size();
+  scene->logits.assign(nd * k, 0.0f);
+  std::vector<std::size_t> anchored;
+  for (std::size_t i = 0; i < l.count; ++i)
+    if (l.has(i, canonical)) anchored.push_back(i);
+  if (anchored.empty() || k <= 1) return;
+  const std::vector<float>& means = scene->dynamics.means;
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t g = 0; g < static_cast<std::ptrdiff_t>(nd); ++g) {
+    const Eigen::Vector3f mu(means[g * 3], means[g * 3 + 1], means[g * 3 + 2]);
+    std::vector<std::pair<float, int>> nearest;
+    nearest.reserve(anchored.size());
+    for (std::size_t i : anchored)
+      nearest.push_back({(l.at(i, canonical) - mu).squaredNorm(), labels[i]});
+    const std::size_t m = std::min<std::size_t>(kVotingTracks, nearest.size());
+    std::partial_sort(nearest.begin(), nearest.begin() + m, nearest.end());
+    std::vector<float> share(k, 0.0f);
+    for (std::size_t j = 0; j < m; ++j) share[nearest[j].second] += 1.0f / m;
+    for (int c = 0; c < k; ++c)
+      scene->logits[g * k + c] = std::log(share[c] + kVoteFloor);
+  }
+}
+
+}  // namespace
+
+GaussianScene InitializeScene(const std::vector<TrainingView>& views,
+                              int num_times, const InitOptions& o,
+                              std::uint64_t seed, InitReport* report_out,
+                              const Tracks2D* given) {
+  o.Check();
+  const Timer timer;
+  InitReport report;
+  const auto finish = [&](GaussianScene scene) {
+    report.seconds = timer.WallSeconds();
+    if (report_out) *report_out = report;
+    return scene;
+  };
+  if (views.empty()) throw Error("init", "views", "0", "no training views");
+  const double voxel = VoxelSize(views, o);
+  report.voxel_size = voxel;
+  const bool any_dynamic = AnyDynamic(views, o);
+  const int canonical = CanonicalTime(views, num_times, any_dynamic);
+  report.canonical_time = canonical;
+
+  // Points from the depth maps, filtered and thinned.
+  std::vector<std::vector<float>> motion_depth(views.size());
+  if (any_dynamic) {
+    for (std::size_t i = 0; i < views.size(); ++i)
+      motion_depth[i] = DepthForMotion(views[i]);
+  }
+  PointCloud statics, dynamics;
+  UnprojectViews(views, motion_depth, canonical, any_dynamic, o, &statics,
+                 &dynamics);
   report.static_points_raw = static_cast<std::int64_t>(statics.size());
   report.dynamic_points_raw = static_cast<std::int64_t>(dynamics.size());
   PointCloudFilterOptions filter = o.filter;
@@ -378,228 +665,26 @@ GaussianScene InitializeScene(const std::vector<TrainingView>& views,
   scene.statics = GaussiansFromCloud(statics, voxel, o);
   scene.dynamics = GaussiansFromCloud(dynamics, voxel, o);
   scene.dynamics.sh_degree = o.sh_degree;
-  if (dynamics.size() == 0) {
-    report.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-            .count();
-    if (report_out) *report_out = report;
-    return scene;
-  }
+  if (dynamics.size() == 0) return finish(std::move(scene));
 
-  // Tracks from the canonical frame's dynamic pixels.
-  const TrainingView* ref = nullptr;
-  std::vector<const TrainingView*> by_time(num_times, nullptr);
-  std::vector<const std::vector<float>*> depth_at(num_times, nullptr);
-  for (std::size_t vi = 0; vi < views.size(); ++vi) {
-    const TrainingView& v = views[vi];
-    if (!by_time[v.time]) {
-      by_time[v.time] = &v;
-      depth_at[v.time] = &motion_depth[vi];
-    }
-    if (v.time == canonical && !v.depth.empty() && !v.dynamic.empty() && !ref) {
-      ref = &v;
-      depth_at[canonical] = &motion_depth[vi];
-    }
-  }
-  by_time[canonical] = ref;
-  std::vector<cv::Mat> frames(num_times);
-  for (int t = 0; t < num_times; ++t) {
-    const TrainingView* v = by_time[t];
-    if (!v || v->camera.width != ref->camera.width ||
-        v->camera.height != ref->camera.height)
-      continue;
-    frames[t] = MatView(v->rgb, v->camera.height, v->camera.width, 3);
-  }
-  std::vector<Eigen::Vector2f> seeds;
-  for (int y = 0; y < ref->camera.height; y += o.track_stride)
-    for (int x = 0; x < ref->camera.width; x += o.track_stride)
-      if (ref->dynamic[static_cast<std::size_t>(y) * ref->camera.width + x] &&
-          (*depth_at[canonical])[static_cast<std::size_t>(y) *
-                                     ref->camera.width +
-                                 x] > 0)
-        seeds.emplace_back(x + 0.5f, y + 0.5f);
-  Tracks2D tracks2d;
-  if (given && given->num_times == num_times) {
-    // The tracker's tracks seen at the canonical time on its moving pixels
-    // with depth (the seeds' condition).
-    const std::vector<float>& depth = *depth_at[canonical];
-    const int w = ref->camera.width, h = ref->camera.height;
-    tracks2d.num_times = num_times;
-    tracks2d.reference_time = canonical;
-    for (std::size_t k = 0; k < given->size(); ++k) {
-      if (!given->is_valid(k, canonical)) continue;
-      const Eigen::Vector2f& p = given->pixel(k, canonical);
-      const int x = static_cast<int>(std::floor(p.x()));
-      const int y = static_cast<int>(std::floor(p.y()));
-      if (x < 0 || y < 0 || x >= w || y >= h) continue;
-      const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if (!ref->dynamic[i] || !(depth[i] > 0)) continue;
-      for (int t = 0; t < num_times; ++t) {
-        tracks2d.pixels.push_back(given->pixel(k, t));
-        tracks2d.valid.push_back(given->valid[k * num_times + t]);
-      }
-    }
-    report.track_flow = "tracker";
-  }
-  if (static_cast<int>(tracks2d.size()) < kMinGivenTracks) {
-    tracks2d = ChainTracksAlongViews(views, by_time, frames, canonical, seeds,
-                                     o.tracks, &report.track_flow);
-  }
-
-  // Lift: X(t) for every valid (track, time) with depth.
-  const std::size_t n = tracks2d.size();
-  std::vector<Eigen::Vector3f> lifted(n * num_times, Eigen::Vector3f::Zero());
-  std::vector<std::uint8_t> ok(n * num_times, 0);
-  std::int64_t valid_pairs = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int t = 0; t < num_times; ++t) {
-      if (!tracks2d.is_valid(i, t) || !by_time[t]) continue;
-      const Eigen::Vector2f& p = tracks2d.pixel(i, t);
-      if (depth_at[t]->empty()) continue;
-      const float z = DepthAt(*depth_at[t], by_time[t]->camera, p);
-      if (!(z > 0)) continue;
-      lifted[i * num_times + t] =
-          Unproject(by_time[t]->camera, p.x(), p.y(), z);
-      ok[i * num_times + t] = 1;
-      ++valid_pairs;
-    }
-  }
+  // The motion bases from tracks of the canonical frame's moving pixels.
+  const ViewsByTime index =
+      IndexByTime(views, motion_depth, num_times, canonical);
+  const Tracks2D tracks = CanonicalTracks(views, index, num_times, canonical, o,
+                                          given, &report.track_flow);
+  const LiftedTracks lifted = Lift(tracks, index, num_times);
+  const std::size_t n = lifted.count;
   report.tracks = static_cast<std::int64_t>(n);
   report.track_coverage =
-      n == 0 ? 0.0 : static_cast<double>(valid_pairs) / (n * num_times);
-
-  // k-means on displacement trajectories X(t) - X(canonical), gaps filled
-  // from the nearest valid time.
+      n == 0 ? 0.0 : static_cast<double>(lifted.valid) / (n * num_times);
   const int k =
       std::max(1, std::min<int>(o.num_bases, static_cast<int>(n) / 3));
-  std::vector<int> labels(n, 0);
-  if (n >= 2 && k > 1) {
-    cv::Mat features(static_cast<int>(n), num_times * 3, CV_32F);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3f origin = lifted[i * num_times + canonical];
-      for (int t = 0; t < num_times; ++t) {
-        int nearest = canonical;
-        for (int d = 0; d < num_times; ++d) {
-          if (t - d >= 0 && ok[i * num_times + t - d]) {
-            nearest = t - d;
-            break;
-          }
-          if (t + d < num_times && ok[i * num_times + t + d]) {
-            nearest = t + d;
-            break;
-          }
-        }
-        const Eigen::Vector3f disp = lifted[i * num_times + nearest] - origin;
-        for (int c = 0; c < 3; ++c)
-          features.at<float>(static_cast<int>(i), t * 3 + c) = disp[c];
-      }
-    }
-    cv::Mat label_mat, centres;
-    cv::theRNG().state = seed + 1;  // cv::kmeans draws from OpenCV's RNG
-    cv::kmeans(features, k, label_mat,
-               cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
-                                50, 1e-6),
-               3, cv::KMEANS_PP_CENTERS, centres);
-    for (std::size_t i = 0; i < n; ++i)
-      labels[i] = label_mat.at<int>(static_cast<int>(i));
-  }
-
-  // One Procrustes fit per cluster and time; robust by one refit on the
-  // inliers; times without enough tracks copy the nearest fitted time.
-  scene.bases.Reset(k, num_times);
-  for (int c = 0; c < k; ++c) {
-    std::vector<std::uint8_t> fitted(num_times, 0);
-    fitted[canonical] = 1;  // the identity, by definition of canonical
-    for (int t = 0; t < num_times; ++t) {
-      if (t == canonical) continue;
-      std::vector<std::size_t> members;
-      for (std::size_t i = 0; i < n; ++i)
-        if (labels[i] == c && ok[i * num_times + t] &&
-            ok[i * num_times + canonical])
-          members.push_back(i);
-      if (static_cast<int>(members.size()) < o.min_tracks_per_fit) continue;
-      Eigen::Matrix4d transform = Eigen::Matrix4d::Identity();
-      for (int pass = 0; pass < 2; ++pass) {
-        Eigen::Matrix3Xd src(3, members.size()), dst(3, members.size());
-        for (std::size_t j = 0; j < members.size(); ++j) {
-          src.col(j) =
-              lifted[members[j] * num_times + canonical].cast<double>();
-          dst.col(j) = lifted[members[j] * num_times + t].cast<double>();
-        }
-        transform = Eigen::umeyama(src, dst, false);
-        if (pass == 1) break;
-        std::vector<double> residual(members.size());
-        for (std::size_t j = 0; j < members.size(); ++j)
-          residual[j] = (transform.topLeftCorner<3, 3>() * src.col(j) +
-                         transform.topRightCorner<3, 1>() - dst.col(j))
-                            .norm();
-        const double limit = kInlierFactor * UpperMedian(residual) + 1e-12;
-        std::vector<std::size_t> inliers;
-        for (std::size_t j = 0; j < members.size(); ++j)
-          if (residual[j] <= limit) inliers.push_back(members[j]);
-        if (static_cast<int>(inliers.size()) < o.min_tracks_per_fit) break;
-        members.swap(inliers);
-      }
-      if (!transform.allFinite()) continue;
-      Eigen::Quaterniond q(Eigen::Matrix3d(transform.topLeftCorner<3, 3>()));
-      if (q.w() < 0) q.coeffs() *= -1;  // the identity's hemisphere
-      float* r = scene.bases.rotation(c, t);
-      r[0] = static_cast<float>(q.w());
-      r[1] = static_cast<float>(q.x());
-      r[2] = static_cast<float>(q.y());
-      r[3] = static_cast<float>(q.z());
-      float* tr = scene.bases.translation(c, t);
-      for (int j = 0; j < 3; ++j) tr[j] = static_cast<float>(transform(j, 3));
-      fitted[t] = 1;
-    }
-    for (int t = 0; t < num_times; ++t) {
-      if (fitted[t]) continue;
-      for (int d = 1; d < num_times; ++d) {
-        const int s = t - d >= 0 && fitted[t - d]          ? t - d
-                      : t + d < num_times && fitted[t + d] ? t + d
-                                                           : -1;
-        if (s < 0) continue;
-        std::copy_n(scene.bases.rotation(c, s), 4, scene.bases.rotation(c, t));
-        std::copy_n(scene.bases.translation(c, s), 3,
-                    scene.bases.translation(c, t));
-        break;
-      }
-    }
-  }
-
-  // Weights: the clusters of the nearest tracks at the canonical time.
-  const std::size_t nd = scene.dynamics.size();
-  scene.logits.assign(nd * k, 0.0f);
-  std::vector<std::size_t> anchored;
-  for (std::size_t i = 0; i < n; ++i)
-    if (ok[i * num_times + canonical]) anchored.push_back(i);
-  if (!anchored.empty() && k > 1) {
-#pragma omp parallel for schedule(static)
-    for (std::ptrdiff_t g = 0; g < static_cast<std::ptrdiff_t>(nd); ++g) {
-      const Eigen::Vector3f mu(scene.dynamics.means[g * 3],
-                               scene.dynamics.means[g * 3 + 1],
-                               scene.dynamics.means[g * 3 + 2]);
-      std::vector<std::pair<float, int>> nearest;
-      nearest.reserve(anchored.size());
-      for (std::size_t i : anchored)
-        nearest.push_back(
-            {(lifted[i * num_times + canonical] - mu).squaredNorm(),
-             labels[i]});
-      const std::size_t m =
-          std::min<std::size_t>(kVotingTracks, nearest.size());
-      std::partial_sort(nearest.begin(), nearest.begin() + m, nearest.end());
-      std::vector<float> share(k, 0.0f);
-      for (std::size_t j = 0; j < m; ++j) share[nearest[j].second] += 1.0f / m;
-      for (int c = 0; c < k; ++c)
-        scene.logits[g * k + c] = std::log(share[c] + kVoteFloor);
-    }
-  }
+  const std::vector<int> labels =
+      ClusterTrajectories(lifted, k, canonical, seed);
+  FitBases(lifted, labels, k, canonical, o, &scene.bases);
+  VoteWeights(lifted, labels, k, canonical, &scene);
   report.num_bases = k;
-  report.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
-  if (report_out) *report_out = report;
-  return scene;
+  return finish(std::move(scene));
 }
 
 }  // namespace pano4d

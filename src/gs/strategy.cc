@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "src/core/error.h"
+#include "src/core/check.h"
 
 namespace pano4d {
 namespace {
@@ -31,7 +31,7 @@ void DensifyStatistics::Assign(std::size_t n) {
   count.assign(n, 0);
 }
 
-DefaultStrategy::DefaultStrategy(const TrainerOptions& options, double extent,
+DefaultStrategy::DefaultStrategy(const StrategyOptions& options, double extent,
                                  std::size_t gaussians)
     : options_(options), extent_(extent) {
   stats_.Assign(gaussians);
@@ -48,14 +48,13 @@ void DefaultStrategy::StepPreForward(std::int64_t iteration,
 void DefaultStrategy::StepPostBackward(const RasterState& state,
                                        const GaussianGradients& grads) {
   const std::vector<int>& radius = state.projected.radius;
-  if (radius.size() != stats_.gradient.size() ||
-      grads.means2d.size() != 2 * radius.size()) {
-    throw Error("densification", "statistics",
-                std::to_string(stats_.gradient.size()) + " Gaussians",
-                "the forward state holds " + std::to_string(radius.size()) +
-                    " and the gradients " +
-                    std::to_string(grads.means2d.size() / 2));
-  }
+  PANO4D_CHECK(radius.size() == stats_.gradient.size() &&
+                   grads.means2d.size() == 2 * radius.size(),
+               "densification statistics of " +
+                   std::to_string(stats_.gradient.size()) +
+                   " Gaussians, the forward state holds " +
+                   std::to_string(radius.size()) + " and the gradients " +
+                   std::to_string(grads.means2d.size() / 2));
   const int w = state.width, h = state.height;
   for (std::size_t i = 0; i < radius.size(); ++i) {
     if (radius[i] <= 0) continue;
@@ -188,11 +187,10 @@ void DefaultStrategy::Densify(OptimisedScene optimised, std::mt19937_64* rng) {
 std::int64_t DefaultStrategy::AddStatic(OptimisedScene optimised,
                                         const GaussianModel& extra) {
   GaussianScene& scene = *optimised.scene;
-  if (extra.sh_degree != scene.statics.sh_degree) {
-    throw Error("trainer", "sh_degree", std::to_string(extra.sh_degree),
-                "added Gaussians must have the scene's SH degree " +
-                    std::to_string(scene.statics.sh_degree));
-  }
+  PANO4D_CHECK(extra.sh_degree == scene.statics.sh_degree,
+               "added Gaussians of SH degree " +
+                   std::to_string(extra.sh_degree) + ", the scene's is " +
+                   std::to_string(scene.statics.sh_degree));
   const std::int64_t room = std::max<std::int64_t>(
       0, options_.max_gaussians - static_cast<std::int64_t>(scene.size()));
   const std::int64_t count =
@@ -218,11 +216,9 @@ std::int64_t DefaultStrategy::RemoveStatic(
     OptimisedScene optimised, const std::vector<std::uint8_t>& keep) {
   GaussianScene& scene = *optimised.scene;
   const std::size_t ns = scene.statics.size();
-  if (keep.size() != ns) {
-    throw Error(
-        "trainer", "keep", std::to_string(keep.size()),
-        "expected one flag per static Gaussian (" + std::to_string(ns) + ")");
-  }
+  PANO4D_CHECK(keep.size() == ns, std::to_string(keep.size()) +
+                                      " keep flags for " + std::to_string(ns) +
+                                      " static Gaussians");
   const auto removed = static_cast<std::int64_t>(
       std::count(keep.begin(), keep.end(), std::uint8_t{0}));
   if (removed == 0) return 0;

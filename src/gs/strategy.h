@@ -12,7 +12,7 @@
 
 #include "src/gs/adam.h"
 #include "src/gs/scene.h"
-#include "src/gs/trainer_options.h"
+#include "src/gs/strategy_options.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -40,7 +40,7 @@ class DefaultStrategy {
  public:
   // `options` with densify_from and densify_until resolved (the trainer
   // resolves -1); `extent` scales the clone/split and world-size bounds.
-  DefaultStrategy(const TrainerOptions& options, double extent,
+  DefaultStrategy(const StrategyOptions& options, double extent,
                   std::size_t gaussians);
   DefaultStrategy() = default;  // no Gaussians; assign a configured one
 
@@ -81,7 +81,7 @@ class DefaultStrategy {
   void Densify(OptimisedScene scene, std::mt19937_64* rng);
   void ResetOpacities(OptimisedScene scene);
 
-  TrainerOptions options_;
+  StrategyOptions options_;
   double extent_ = 1.0;
   DensifyStatistics stats_;
   std::int64_t densified_total_ = 0, pruned_total_ = 0;

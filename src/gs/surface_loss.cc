@@ -62,8 +62,7 @@ bool DepthNormalAt(const std::vector<float>& depth,
   }
   const auto point = [&](int px, int py) {
     const T d = at(px, py);
-    return Vec3((px + T(0.5) - camera.cx) / camera.fx * d,
-                (py + T(0.5) - camera.cy) / camera.fy * d, d);
+    return camera.CameraPoint(px + T(0.5), py + T(0.5), d);
   };
   const Vec3 n = (point(x + 1, y) - point(x - 1, y))
                      .cross(point(x, y + 1) - point(x, y - 1));

@@ -71,12 +71,12 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
       rng_(seed) {
   options_.Check();
   scene_.Check();
-  if (options_.densify_until < 0)
-    options_.densify_until = options_.iterations / 2;
+  if (options_.strategy.densify_until < 0)
+    options_.strategy.densify_until = options_.iterations / 2;
   // A short schedule still densifies over half its window.
-  if (options_.densify_from < 0)
-    options_.densify_from =
-        std::min(kDensifyFrom, std::max(1, options_.densify_until / 2));
+  if (options_.strategy.densify_from < 0)
+    options_.strategy.densify_from = std::min(
+        kDensifyFrom, std::max(1, options_.strategy.densify_until / 2));
   fingerprint_ = options_.ToJson();
   if (views_.empty()) {
     throw Error("fit", "views", "0", "no training views");
@@ -128,7 +128,7 @@ Trainer::Trainer(GaussianScene scene, std::vector<TrainingView> views,
   }
   RegisterGroups();
   UpdateLearningRates();
-  strategy_ = DefaultStrategy(options_, extent_, scene_.size());
+  strategy_ = DefaultStrategy(options_.strategy, extent_, scene_.size());
 }
 
 void Trainer::RegisterGroups() {

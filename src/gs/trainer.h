@@ -40,7 +40,8 @@ struct PhaseTimes {
          optimise = 0, densify = 0;
 };
 
-struct CheckpointFile;  // checkpoint.cc
+class CheckpointReader;  // checkpoint.h
+struct CheckpointState;
 
 // A fit: 3D Gaussian splatting's training loop over the 4D scene. The
 // expansion reaches it only through SceneEditor.
@@ -87,7 +88,7 @@ class Trainer : public SceneEditor {
   // Everything a resumed run needs to continue as if never stopped
   // (parameters, optimiser moments, densification statistics, the random
   // generator, the epoch order) and the fingerprint, written atomically
-  // (checkpoint.cc).
+  // (trainer_checkpoint.cc, src/gs/checkpoint.h).
   void SaveCheckpoint(const std::filesystem::path& path) const;
   // Throws pano4d::Error naming the file when it is corrupt (its checksum,
   // an iteration outside this run's), belongs to other frames or another
@@ -121,7 +122,13 @@ class Trainer : public SceneEditor {
  private:
   void RegisterGroups();
   RasterSettings Settings() const;
-  void Restore(const CheckpointFile& file);
+  // Resuming (trainer_checkpoint.cc): whether the file belongs to this run,
+  // then its state restored.
+  void Restore(const CheckpointReader& file);
+  void CheckResumable(const CheckpointReader& file,
+                      const CheckpointState& state) const;
+  void RestoreArrays(const CheckpointReader& file,
+                     const CheckpointState& state);
   int NextView();
   OptimisedScene Optimised() {
     return {&scene_, &static_adam_, &dynamic_adam_};

@@ -55,54 +55,42 @@ void TrainerOptions::Check() const {
                          {lr_basis_translation, "lr_basis_translation"},
                          {lr_appearance, "lr_appearance"}})
     non_negative(v, name);
-  positive(densify_every, "densify_every");
-  positive(densify_gradient, "densify_gradient");
-  positive(percent_dense, "percent_dense");
-  non_negative(prune_opacity, "prune_opacity");
-  positive(max_screen_radius, "max_screen_radius");
-  positive(opacity_reset_every, "opacity_reset_every");
   non_negative(max_static_scale_pixels, "max_static_scale_pixels");
-  positive(static_cast<double>(max_gaussians), "max_gaussians");
+  strategy.Check();
 }
 
 nlohmann::json TrainerOptions::ToJson() const {
-  return {{"iterations", iterations},
-          {"ssim_weight", ssim_weight},
-          {"depth_weight", depth_weight},
-          {"smoothness_weight", smoothness_weight},
-          {"anisotropy_weight", anisotropy_weight},
-          {"max_anisotropy", max_anisotropy},
-          {"normal_weight", normal_weight},
-          {"normal_tolerance", normal_tolerance},
-          {"hidden_weight", hidden_weight},
-          {"hidden_thickness", hidden_thickness},
-          {"flow_weight", flow_weight},
-          {"flow_tolerance", flow_tolerance},
-          {"flow_huber_pixels", flow_huber_pixels},
-          {"disparity_weight", disparity_weight},
-          {"disparity_moving_only", disparity_moving_only},
-          {"appearance", appearance},
-          {"appearance_weight", appearance_weight},
-          {"lr_appearance", lr_appearance},
-          {"lr_mean", lr_mean},
-          {"lr_log_scale", lr_log_scale},
-          {"lr_quat", lr_quat},
-          {"lr_opacity", lr_opacity},
-          {"lr_sh", lr_sh},
-          {"lr_logit", lr_logit},
-          {"lr_basis_rotation", lr_basis_rotation},
-          {"lr_basis_translation", lr_basis_translation},
-          {"densify_from", densify_from},
-          {"densify_until", densify_until},
-          {"densify_every", densify_every},
-          {"densify_gradient", densify_gradient},
-          {"percent_dense", percent_dense},
-          {"prune_opacity", prune_opacity},
-          {"max_screen_radius", max_screen_radius},
-          {"opacity_reset_every", opacity_reset_every},
-          {"max_gaussians", max_gaussians},
-          {"max_static_scale_pixels", max_static_scale_pixels},
-          {"background", {background.x(), background.y(), background.z()}}};
+  nlohmann::json j = {
+      {"iterations", iterations},
+      {"ssim_weight", ssim_weight},
+      {"depth_weight", depth_weight},
+      {"smoothness_weight", smoothness_weight},
+      {"anisotropy_weight", anisotropy_weight},
+      {"max_anisotropy", max_anisotropy},
+      {"normal_weight", normal_weight},
+      {"normal_tolerance", normal_tolerance},
+      {"hidden_weight", hidden_weight},
+      {"hidden_thickness", hidden_thickness},
+      {"flow_weight", flow_weight},
+      {"flow_tolerance", flow_tolerance},
+      {"flow_huber_pixels", flow_huber_pixels},
+      {"disparity_weight", disparity_weight},
+      {"disparity_moving_only", disparity_moving_only},
+      {"appearance", appearance},
+      {"appearance_weight", appearance_weight},
+      {"lr_appearance", lr_appearance},
+      {"lr_mean", lr_mean},
+      {"lr_log_scale", lr_log_scale},
+      {"lr_quat", lr_quat},
+      {"lr_opacity", lr_opacity},
+      {"lr_sh", lr_sh},
+      {"lr_logit", lr_logit},
+      {"lr_basis_rotation", lr_basis_rotation},
+      {"lr_basis_translation", lr_basis_translation},
+      {"max_static_scale_pixels", max_static_scale_pixels},
+      {"background", {background.x(), background.y(), background.z()}}};
+  j.update(strategy.ToJson());
+  return j;
 }
 
 }  // namespace pano4d

@@ -6,6 +6,8 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "src/gs/strategy_options.h"
+
 namespace pano4d {
 
 // The depth loss' weight on depth the dataset gives (rendered, a depth
@@ -87,23 +89,9 @@ struct TrainerOptions {
   double lr_logit = 1e-2;
   double lr_basis_rotation = 1e-4;
   double lr_basis_translation = 1.6e-4;
-  // Densification (3DGS): every densify_every iterations in
-  // [densify_from, densify_until), Gaussians whose mean screen-space
-  // gradient (in NDC units) exceeds the threshold are cloned when small
-  // (largest scale <= percent_dense x extent) and split in two when large.
-  int densify_from = -1;   // -1: 500 (3DGS's), or half of densify_until
-  int densify_until = -1;  // -1: half the iterations
-  int densify_every = 100;
-  double densify_gradient = 2e-4;
-  double percent_dense = 0.01;
-  // Pruning: opacity below this; after the first opacity reset also screen
-  // radius above max_screen_radius pixels or scale above 0.1 extent.
-  double prune_opacity = 0.005;
-  double max_screen_radius = 20.0;
-  // Opacities are reset to at most 0.01 every this many iterations while
-  // densifying (3DGS), so that floaters can fade and be pruned.
-  int opacity_reset_every = 3000;
-  std::int64_t max_gaussians = 500000;
+  // Densification and pruning (strategy_options.h; recorded flat among
+  // these options in fit.json and the checkpoint).
+  StrategyOptions strategy;
   // After every step a static Gaussian's scales are clamped to this many
   // pixels of the median training view at the median depth (16: the
   // largest initial scale, 8 voxels of the initialisation); 0: no clamp.

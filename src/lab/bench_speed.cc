@@ -94,7 +94,8 @@ PhaseTimes FitStepPhases(const GaussianScene& scene,
   given.iterations = steps + 1;
   const FitOptions used = ResolveFitOptions(given, FitInputOf(frames));
   TrainerOptions options = used.trainer;
-  options.densify_from = options.densify_until = options.iterations + 1;
+  options.strategy.densify_from = options.strategy.densify_until =
+      options.iterations + 1;
   Trainer trainer(scene, LoadTrainingViews(frames.train), options, 0);
   trainer.Step();
   const PhaseTimes warm = trainer.times();

@@ -537,10 +537,7 @@ void Expansion::KeepDirection(SceneEditor* fit, const StepSources& sources,
         if (!masks[s].at<std::uint8_t>(y, x) || out.alpha[p] >= kCoveredAlpha ||
             !(z > 0))
           continue;
-        const Eigen::Vector3f xc((x + 0.5f - c.cx) / c.fx * z,
-                                 (y + 0.5f - c.cy) / c.fy * z, z);
-        points->cloud.points.push_back(c.rotation.transpose() *
-                                       (xc - c.translation));
+        points->cloud.points.push_back(c.Unproject(x + 0.5f, y + 0.5f, z));
         const cv::Vec3f col = refined.at<cv::Vec3f>(y, x);
         points->cloud.colors.emplace_back(col[0], col[1], col[2]);
         points->depths.push_back(z);

@@ -88,9 +88,7 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
       for (int x = 0; x < c.width; x += kCentroidStride) {
         const float z = v.depth[static_cast<std::size_t>(y) * c.width + x];
         if (!(z > 0)) continue;
-        const Eigen::Vector3f xc((x + 0.5f - c.cx) / c.fx * z,
-                                 (y + 0.5f - c.cy) / c.fy * z, z);
-        points.push_back(c.rotation.transpose() * (xc - c.translation));
+        points.push_back(c.Unproject(x + 0.5f, y + 0.5f, z));
       }
   }
   const PanoramaFrame frame = MakePanoramaFrame(points, cameras);

@@ -84,8 +84,7 @@ class Projector {
   }
   // The point at continuous source pixel position (x, y) and z-depth z.
   Landing Land(double x, double y, double z) const {
-    const Eigen::Vector3d p_src((x - source_.cx) / source_.fx * z,
-                                (y - source_.cy) / source_.fy * z, z);
+    const Eigen::Vector3d p_src = source_.CameraPoint(x, y, z);
     const Eigen::Vector3d p = rotation_ * p_src + translation_;
     Landing l;
     l.z = p.z();

@@ -18,6 +18,7 @@
 #include "src/core/progress.h"
 #include "src/core/stamp.h"
 #include "src/core/strings.h"
+#include "src/core/timer.h"
 #include "src/datasets/dataset.h"
 #include "src/datasets/depth_map.h"
 #include "src/geometry/depth_alignment.h"
@@ -660,8 +661,8 @@ std::string DepthSummary::BriefReport() const {
   return text;
 }
 
-StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
-  StageInputs in(ws.root());
+StageRecord DepthStageRecord(const Workspace& ws, const DepthOptions& o) {
+  StageRecord in(ws.root());
   // The options as they act: the protocol's factor resolved, paths however
   // they were spelt (`data/` and `/abs/data` are one input).
   DepthOptions as_used = o;
@@ -696,6 +697,7 @@ StageInputs DepthStageInputs(const Workspace& ws, const DepthOptions& o) {
 
 DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   o.Check();
+  const Timer timer;
   const StageStamp stamp(ws, "depth");
   stamp.Remove();
   EnsureDirectory(ws.depth());
@@ -771,7 +773,7 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
   WriteWorkspaceFrames(ws.root(), frames);
   for (const WorkspaceFrame& f : frames.train)
     summary.with_depth += !f.depth.empty();
-  stamp.Write(DepthStageInputs(ws, o));
+  stamp.Write(DepthStageRecord(ws, o), timer.WallSeconds());
   return summary;
 }
 

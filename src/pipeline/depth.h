@@ -66,13 +66,13 @@ struct DepthSummary {
 };
 
 // Writes WS/pano4d/frames.json and the depth maps, and the stage's stamp
-// (DepthStageInputs) once they are complete.
+// (DepthStageRecord) once they are complete.
 DepthSummary RunDepth(const Workspace& workspace, const DepthOptions& options);
 
 // What the depth stage reads (its options; the dataset's files, or the SfM
 // model, images and masks; --depth-dir) and writes, for its stamp:
 // `pano4d run` reuses the stage while its stamp records the same.
-StageInputs DepthStageInputs(const Workspace& workspace,
+StageRecord DepthStageRecord(const Workspace& workspace,
                              const DepthOptions& options);
 
 // The depth source RunDepth takes (one of kDepthFrom*, frames.h): the order

@@ -14,6 +14,7 @@
 #include "src/core/npy.h"
 #include "src/core/progress.h"
 #include "src/core/run_recorder.h"
+#include "src/core/stamp.h"
 #include "src/core/stop_signal.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
@@ -334,6 +335,23 @@ std::filesystem::path BackUpPreviousFit(const Workspace& ws) {
   return backup;
 }
 
+// How the fit's stamp and checkpoint name the training frames they were
+// made on.
+constexpr char kTrainingFrames[] = "the training frames";
+
+StageRecord FitStageRecord(const Workspace& ws, const FitOptions& used,
+                           const std::vector<TrainingView>& views) {
+  StageRecord record(ws.root());
+  const nlohmann::json options = ResumeFingerprint(used);
+  for (const auto& [key, value] : options.items()) record.Option(key, value);
+  record.Option("iterations", used.trainer.iterations);
+  record.Content(kTrainingFrames, ViewsFingerprint(views));
+  // The tracks and masks of the priors folder, which the views do not hold.
+  if (!used.priors.empty()) record.File(used.priors);
+  record.Output(ws.checkpoint()).Output(ws.fit_json());
+  return record;
+}
+
 std::optional<std::string> CheckpointMismatch(
     const Workspace& ws, const FitOptions& used,
     const std::vector<TrainingView>& views) {
@@ -341,34 +359,62 @@ std::optional<std::string> CheckpointMismatch(
   const CheckpointFingerprints saved =
       ReadCheckpointFingerprints(ws.checkpoint());
   if (saved.options.is_null()) return "the checkpoint records no options";
-  if (const std::optional<JsonDifference> d =
-          FirstDifference(saved.options, ResumeFingerprint(used))) {
-    return "option " + d->path + " was " + JsonValueForMessage(d->first) +
-           ", now " + JsonValueForMessage(d->second);
-  }
-  if (saved.scene != ViewsFingerprint(views))
-    return "the checkpoint was written for other frames";
-  return std::nullopt;
+  // The checkpoint records the options and the frames; a checkpoint
+  // resumes to more iterations.
+  nlohmann::json now = FitStageRecord(ws, used, views).json();
+  now["options"].erase("iterations");
+  now.erase("files");
+  return RecordDifference({{"options", saved.options},
+                           {"contents", {{kTrainingFrames, saved.scene}}}},
+                          now);
 }
 
-FitSummary FitController::Run() {
-  given_.Check();
-  const Workspace& ws = workspace_;
-  const FitOptions o = ResolveFitOptions(
-      given_, {inputs_.depth_source, static_cast<int>(inputs_.train.size())});
-  FitSummary summary;
-  summary.given = given_;
-  summary.used = o;
-  summary.depth_source = inputs_.depth_source;
-  summary.priors = inputs_.priors;
-  summary.workspace = ws;
-  summary.train_frames = inputs_.train.size();
-  summary.val_frames = inputs_.val.size();
-  EnsureDirectory(ws.checkpoint().parent_path());
-  EnsureDirectory(ws.metrics());
-  Timer total;
+namespace {
 
-  PANO4D_LOG(kInfo) << "fit: depth weight " << o.trainer.depth_weight << " ("
+// One fit from start to end: FitController::Run's steps.
+class FitRun {
+ public:
+  FitRun(const Workspace& ws, const FitOptions& given, FitInputs* inputs,
+         const std::atomic<bool>* stop)
+      : ws_(ws),
+        given_(given),
+        o_(ResolveFitOptions(given, {inputs->depth_source,
+                                     static_cast<int>(inputs->train.size())})),
+        inputs_(*inputs),
+        stop_(*stop) {}
+
+  FitSummary Run();
+
+ private:
+  void StartSummary();
+  std::unique_ptr<Trainer> StartTrainer(bool resuming);
+  void RunDueExpansions(Trainer* trainer);
+  void CarveIfDue(Trainer* trainer);
+  void RecordIteration(Trainer* trainer, RunRecorder* recorder,
+                       ProgressBar* bar);
+  bool StopsEarly(Trainer* trainer);
+  void WriteProducts(Trainer* trainer);
+
+  const Workspace& ws_;
+  const FitOptions& given_;
+  const FitOptions o_;
+  FitInputs& inputs_;
+  const std::atomic<bool>& stop_;
+  FitSummary summary_;
+  ExpansionState ex_;
+  LossWindow window_;
+  Timer total_;
+};
+
+void FitRun::StartSummary() {
+  summary_.given = given_;
+  summary_.used = o_;
+  summary_.depth_source = inputs_.depth_source;
+  summary_.priors = inputs_.priors;
+  summary_.workspace = ws_;
+  summary_.train_frames = inputs_.train.size();
+  summary_.val_frames = inputs_.val.size();
+  PANO4D_LOG(kInfo) << "fit: depth weight " << o_.trainer.depth_weight << " ("
                     << (given_.depth_weight ? std::string("given")
                         : inputs_.depth_source.empty()
                             ? std::string(
@@ -377,145 +423,193 @@ FitSummary FitController::Run() {
                             : "depth from " + inputs_.depth_source)
                     << ")";
   WarnIfNearThePlane(inputs_.train);
-
-  const fs::path ckpt = ws.checkpoint();
-  const bool resuming = o.resume && fs::exists(ckpt);
-  if (o.resume && !resuming) {
-    PANO4D_LOG(kInfo) << "fit: no checkpoint at " << ckpt.string()
-                      << "; starting from the beginning";
-  }
-  Timer init_timer;
-  GaussianScene scene;
-  if (resuming) {
-    scene = ReadCheckpointScene(ckpt);
-  } else {
-    scene = InitializeScene(inputs_.train, inputs_.num_times, o.init, o.seed,
-                            &summary.init,
-                            inputs_.tracks ? &*inputs_.tracks : nullptr);
-    PANO4D_LOG(kInfo) << summary.init.Brief();
-  }
-  summary.seconds.init = init_timer.WallSeconds();
-  if (o.trainer.appearance) {
+  if (o_.trainer.appearance) {
     const int matched = MatchValidationCameras(inputs_.train, &inputs_.val);
-    summary.validation_appearance =
+    summary_.validation_appearance =
         matched == 0
             ? "none (no validation camera is a training camera)"
             : "the same camera's training frame (" + std::to_string(matched) +
                   " of " + std::to_string(inputs_.val.size()) +
                   " validation frames)";
   }
-  const std::unique_ptr<Trainer> owned =
-      MakeFitTrainer(std::move(scene), std::move(inputs_.train), o);
-  Trainer& trainer = *owned;
+}
+
+// The initial scene, or the checkpoint's state when resuming.
+std::unique_ptr<Trainer> FitRun::StartTrainer(bool resuming) {
+  const fs::path ckpt = ws_.checkpoint();
+  Timer init_timer;
+  GaussianScene scene;
   if (resuming) {
-    trainer.LoadCheckpoint(ckpt);
-    summary.resumed_at = trainer.iteration();
+    scene = ReadCheckpointScene(ckpt);
+  } else {
+    scene = InitializeScene(inputs_.train, inputs_.num_times, o_.init, o_.seed,
+                            &summary_.init,
+                            inputs_.tracks ? &*inputs_.tracks : nullptr);
+    PANO4D_LOG(kInfo) << summary_.init.Brief();
+  }
+  summary_.seconds.init = init_timer.WallSeconds();
+  std::unique_ptr<Trainer> trainer =
+      MakeFitTrainer(std::move(scene), std::move(inputs_.train), o_);
+  if (resuming) {
+    trainer->LoadCheckpoint(ckpt);
+    summary_.resumed_at = trainer->iteration();
     PANO4D_LOG(kInfo) << "fit: resumed from " << ckpt.string()
-                      << " at iteration " << summary.resumed_at;
+                      << " at iteration " << summary_.resumed_at;
   }
+  return trainer;
+}
 
-  ExpansionState ex = StartExpansion(ws, o, resuming, &trainer, &summary);
-  const int iterations = o.trainer.iterations;
+void FitRun::RunDueExpansions(Trainer* trainer) {
+  if (!ex_.expansion) return;
+  for (int e :
+       StepsDueAt(o_.expansion, trainer->iteration(), o_.trainer.iterations)) {
+    const ExpansionStepReport r = ex_.expansion->RunStep(trainer, e);
+    summary_.seconds.expansion += r.seconds;
+    PANO4D_LOG(kInfo) << r.Brief();
+    ex_.steps.push_back(r.ToJson());
+    WriteJson(ws_.expansion() / "steps.json", ex_.steps);
+  }
+}
 
+void FitRun::CarveIfDue(Trainer* trainer) {
+  if (!ex_.expansion || o_.expansion.carve_every <= 0 ||
+      trainer->iteration() % o_.expansion.carve_every != 0)
+    return;
+  const Timer carve;
+  ex_.expansion->Carve(trainer);
+  summary_.seconds.expansion += carve.WallSeconds();
+}
+
+// The run log's row and the progress bar's status every --log-every
+// iterations, with validation every --validate-every and at the end.
+void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
+                             ProgressBar* bar) {
   const std::vector<ValidationView>& val = inputs_.val;
-  RunRecorder recorder(ws.fit_csv(), "fit",
-                       {"loss", "l1", "depth_loss", "train_psnr", "gaussians",
-                        "val_psnr", "val_mpsnr", "val_upsnr"},
-                       resuming && fs::exists(ws.fit_csv()));
-  ProgressBar bar("fit", iterations);
-  bar.Add(trainer.iteration());
-  LossWindow window;
-  while (!trainer.Done()) {
-    if (ex.expansion) {
-      for (int e : StepsDueAt(o.expansion, trainer.iteration(), iterations)) {
-        const ExpansionStepReport r = ex.expansion->RunStep(&trainer, e);
-        summary.seconds.expansion += r.seconds;
-        PANO4D_LOG(kInfo) << r.Brief();
-        ex.steps.push_back(r.ToJson());
-        WriteJson(ws.expansion() / "steps.json", ex.steps);
-      }
-    }
-    summary.last_step = trainer.Step();
-    if (ex.expansion && o.expansion.carve_every > 0 &&
-        trainer.iteration() % o.expansion.carve_every == 0) {
-      const Timer carve;
-      ex.expansion->Carve(&trainer);
-      summary.seconds.expansion += carve.WallSeconds();
-    }
-    window.Add(summary.last_step);
-    bar.Add();
-    const std::int64_t it = trainer.iteration();
-    const bool validate =
-        !val.empty() && (it % o.validate_every == 0 || trainer.Done());
-    if (it % o.log_every == 0 || validate || trainer.Done()) {
-      QuickMetrics q;
-      if (validate) {
-        Timer t;
-        q = Validate(&trainer, val);
-        summary.last_validation = q;
-        summary.seconds.validation += t.WallSeconds();
-      }
-      const double n = window.steps;
-      recorder.Record(
-          it, {window.loss / n, window.l1 / n, window.depth / n,
-               window.psnr / n, static_cast<double>(trainer.scene().size()),
-               q.psnr, q.mpsnr, q.upsnr});
-      std::ostringstream status;
-      status.precision(4);
-      status << "loss " << window.loss / n << "  psnr " << window.psnr / n
-             << "  " << trainer.scene().size() << " G";
-      if (q.mpsnr) status << "  val m " << *q.mpsnr;
-      bar.SetStatus(status.str());
-      window = {};
-    }
-    if (it % o.checkpoint_every == 0 || trainer.Done())
-      trainer.SaveCheckpoint(ckpt);
-    if (trainer.Done()) break;
-    if (o.time_budget > 0 && total.WallSeconds() > o.time_budget) {
-      summary.termination = FitTermination::kTimeBudget;
-      trainer.SaveCheckpoint(ckpt);
-      PANO4D_LOG(kInfo) << "fit: time budget of " << o.time_budget
-                        << " s reached at iteration " << it;
-      break;
-    }
-    if (stop_.load() || StopRequested()) {
-      summary.termination = FitTermination::kStopped;
-      trainer.SaveCheckpoint(ckpt);
-      PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it
-                        << (StopRequested() ? " on request (signal)" : "")
-                        << "; checkpoint " << ckpt.string();
-      break;
-    }
+  const std::int64_t it = trainer->iteration();
+  const bool validate =
+      !val.empty() && (it % o_.validate_every == 0 || trainer->Done());
+  if (it % o_.log_every != 0 && !validate && !trainer->Done()) return;
+  QuickMetrics q;
+  if (validate) {
+    Timer t;
+    q = Validate(trainer, val);
+    summary_.last_validation = q;
+    summary_.seconds.validation += t.WallSeconds();
   }
-  bar.Finish();
-  if (StopRequested()) {
-    // Stopped before a time limit: the checkpoint is what counts; the
-    // renders and fit.json come when the same command resumes.
-    Summarise(trainer, ex, &summary);
-    summary.seconds.total = total.WallSeconds();
-    return summary;
-  }
-  if (ex.expansion && !ex.expansion->cameras().empty()) {
-    WriteTrajectories(ws.expansion(), ex.expansion->cameras(),
-                      SourceCamerasOf(trainer.views()));
-    WritePanoramas(ws.panorama(), trainer.scene(), ex.expansion->frame(),
-                   o.panorama_width, o.panorama_width / kPanoramaAspect);
-  }
-  summary.train_psnr = TrainPsnr(&trainer);
+  const double n = window_.steps;
+  recorder->Record(
+      it,
+      {window_.loss / n, window_.l1 / n, window_.depth / n, window_.psnr / n,
+       static_cast<double>(trainer->scene().size()), q.psnr, q.mpsnr, q.upsnr});
+  std::ostringstream status;
+  status.precision(4);
+  status << "loss " << window_.loss / n << "  psnr " << window_.psnr / n << "  "
+         << trainer->scene().size() << " G";
+  if (q.mpsnr) status << "  val m " << *q.mpsnr;
+  bar->SetStatus(status.str());
+  window_ = {};
+}
 
-  WriteValidation(ws, o, inputs_, &trainer, ex.expansion.get(), &summary);
+// Checkpoints every --checkpoint-every iterations and at the end; true
+// when the fit ends here (done, the time budget spent, or a stop asked).
+bool FitRun::StopsEarly(Trainer* trainer) {
+  const fs::path ckpt = ws_.checkpoint();
+  const std::int64_t it = trainer->iteration();
+  if (it % o_.checkpoint_every == 0 || trainer->Done())
+    trainer->SaveCheckpoint(ckpt);
+  if (trainer->Done()) return true;
+  if (o_.time_budget > 0 && total_.WallSeconds() > o_.time_budget) {
+    summary_.termination = FitTermination::kTimeBudget;
+    trainer->SaveCheckpoint(ckpt);
+    PANO4D_LOG(kInfo) << "fit: time budget of " << o_.time_budget
+                      << " s reached at iteration " << it;
+    return true;
+  }
+  if (stop_.load() || StopRequested()) {
+    summary_.termination = FitTermination::kStopped;
+    trainer->SaveCheckpoint(ckpt);
+    PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it
+                      << (StopRequested() ? " on request (signal)" : "")
+                      << "; checkpoint " << ckpt.string();
+    return true;
+  }
+  return false;
+}
+
+// The trajectories and panoramas of the expansion, the validation renders
+// and metrics, the plot, fit.json and, for a fit that ran every iteration,
+// its stamp.
+void FitRun::WriteProducts(Trainer* trainer) {
+  if (ex_.expansion && !ex_.expansion->cameras().empty()) {
+    WriteTrajectories(ws_.expansion(), ex_.expansion->cameras(),
+                      SourceCamerasOf(trainer->views()));
+    WritePanoramas(ws_.panorama(), trainer->scene(), ex_.expansion->frame(),
+                   o_.panorama_width, o_.panorama_width / kPanoramaAspect);
+  }
+  summary_.train_psnr = TrainPsnr(trainer);
+  WriteValidation(ws_, o_, inputs_, trainer, ex_.expansion.get(), &summary_);
   try {
-    PlotRunLog(ws.fit_csv(), ws.fit_plot(),
+    PlotRunLog(ws_.fit_csv(), ws_.fit_plot(),
                {"train_psnr", "val_psnr", "val_mpsnr", "val_upsnr"},
                "pano4d fit: PSNR (dB) against wall time");
   } catch (const Error& e) {
     PANO4D_LOG(kWarning) << "fit: no plot: " << e.what();
   }
+  Summarise(*trainer, ex_, &summary_);
+  summary_.seconds.total = total_.WallSeconds();
+  WriteJson(ws_.fit_json(), summary_.ToJson());
+  if (summary_.termination == FitTermination::kIterationsDone) {
+    StageStamp(ws_, "fit")
+        .Write(FitStageRecord(ws_, o_, trainer->views()),
+               summary_.seconds.total);
+  }
+}
 
-  Summarise(trainer, ex, &summary);
-  summary.seconds.total = total.WallSeconds();
-  WriteJson(ws.fit_json(), summary.ToJson());
-  return summary;
+FitSummary FitRun::Run() {
+  StageStamp(ws_, "fit").Remove();
+  EnsureDirectory(ws_.checkpoint().parent_path());
+  EnsureDirectory(ws_.metrics());
+  StartSummary();
+  const fs::path ckpt = ws_.checkpoint();
+  const bool resuming = o_.resume && fs::exists(ckpt);
+  if (o_.resume && !resuming) {
+    PANO4D_LOG(kInfo) << "fit: no checkpoint at " << ckpt.string()
+                      << "; starting from the beginning";
+  }
+  const std::unique_ptr<Trainer> trainer = StartTrainer(resuming);
+  ex_ = StartExpansion(ws_, o_, resuming, trainer.get(), &summary_);
+  RunRecorder recorder(ws_.fit_csv(), "fit",
+                       {"loss", "l1", "depth_loss", "train_psnr", "gaussians",
+                        "val_psnr", "val_mpsnr", "val_upsnr"},
+                       resuming && fs::exists(ws_.fit_csv()));
+  ProgressBar bar("fit", o_.trainer.iterations);
+  bar.Add(trainer->iteration());
+  while (!trainer->Done()) {
+    RunDueExpansions(trainer.get());
+    summary_.last_step = trainer->Step();
+    CarveIfDue(trainer.get());
+    window_.Add(summary_.last_step);
+    bar.Add();
+    RecordIteration(trainer.get(), &recorder, &bar);
+    if (StopsEarly(trainer.get())) break;
+  }
+  bar.Finish();
+  if (StopRequested()) {
+    // Stopped before a time limit: the checkpoint is what counts; the
+    // renders and fit.json come when the same command resumes.
+    Summarise(*trainer, ex_, &summary_);
+    summary_.seconds.total = total_.WallSeconds();
+    return summary_;
+  }
+  WriteProducts(trainer.get());
+  return summary_;
+}
+
+}  // namespace
+
+FitSummary FitController::Run() {
+  given_.Check();
+  return FitRun(workspace_, given_, &inputs_, &stop_).Run();
 }
 
 FitSummary RunFit(const Workspace& workspace, const FitOptions& options) {

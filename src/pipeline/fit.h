@@ -16,6 +16,7 @@
 
 #include "src/core/frames.h"
 #include "src/core/image.h"
+#include "src/core/stamp.h"
 #include "src/core/workspace.h"
 #include "src/gs/trainer.h"
 #include "src/pipeline/fit_options.h"
@@ -113,8 +114,16 @@ FitSummary RunFit(const Workspace& workspace, const FitOptions& options);
 // already (the backup of an earlier --force run that did not complete).
 std::filesystem::path BackUpPreviousFit(const Workspace& workspace);
 
+// What a fit with `used` options (ResolveFitOptions' result) on `views`
+// runs with and reads (its options, ViewsFingerprint of the frames, the
+// priors folder) and writes, for its stamp (src/core/stamp.h): written when
+// every iteration ran, it lets `pano4d run` reuse the fit.
+StageRecord FitStageRecord(const Workspace& workspace, const FitOptions& used,
+                           const std::vector<TrainingView>& views);
+
 // Whether WS/pano4d/checkpoints/fit.ckpt was written by a fit with these
-// (used) options on the frames `views` (ViewsFingerprint): the reason it
+// (used) options on the frames `views`, compared as RecordDifference
+// compares stamps (a checkpoint resumes to more iterations): the reason it
 // was not, or nothing when it was.
 std::optional<std::string> CheckpointMismatch(
     const Workspace& workspace, const FitOptions& used,

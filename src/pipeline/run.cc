@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <optional>
 #include <ostream>
 #include <string>
 
@@ -116,16 +118,9 @@ void AdoptColmapWorkspace(const Workspace& ws) {
               "mapper and image_undistorter, or `pano4d run --video`");
 }
 
-// Whether fit.json says a fit of `iterations` finished.
-bool FitComplete(const Workspace& ws, int iterations) {
-  if (!fs::exists(ws.fit_json())) return false;
-  const nlohmann::json j = ReadJson(ws.fit_json());
-  return j.value("iterations", 0) >= iterations &&
-         !j.value("stopped_by_time_budget", false);
-}
-
 // A stage's status in plan.json when an earlier run's outputs are reused.
 constexpr char kReused[] = "complete from an earlier run";
+constexpr char kNothingChanged[] = "nothing it read changed";
 
 struct StageResult {
   std::string status;
@@ -208,10 +203,10 @@ PlanFacts GatherFacts(const RunOptions& o) {
     f.priors_dir = o.depth.priors.string();
     f.priors_depth = !priors.Of(PriorKind::kDepth).empty() &&
                      f.depth_dir.empty() && !f.depth_given;
-    f.priors = DescribePriorUse(
-        priors, !f.depth_dir.empty() ? "--depth-dir's maps"
-                : f.depth_given      ? "the dataset's depth maps"
-                                     : "");
+    f.priors =
+        DescribePriorUse(priors, !f.depth_dir.empty() ? "--depth-dir's maps"
+                                 : f.depth_given ? "the dataset's depth maps"
+                                                 : "");
   }
   f.min_posed = o.min_posed;
   // A workspace that an earlier run took through sfm or depth already
@@ -230,9 +225,12 @@ PlanFacts GatherFacts(const RunOptions& o) {
   return f;
 }
 
-RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
+namespace {
+
+// `given` checked, with its defaults: the COLMAP workspace as the
+// workspace, and one factor for every stage (the protocol's, unless given).
+RunOptions ResolveRunOptions(const RunOptions& given) {
   RunOptions o = given;
-  // A COLMAP workspace is the workspace.
   if (o.workspace.empty()) o.workspace = o.colmap;
   const int inputs = !o.sfm.video.empty() + !o.sfm.images.empty() +
                      !o.colmap.empty() + !o.dataset.empty();
@@ -240,14 +238,13 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     throw Error("pano4d run", "input", std::to_string(inputs) + " given",
                 "give exactly one of --video, --images, --colmap, --dataset");
   }
-  const Workspace ws(o.workspace);
-  if (ws.root().empty()) {
+  if (o.workspace.empty()) {
     throw Error("--workspace", "", "",
                 "required (except with --colmap, whose folder is the "
                 "workspace)");
   }
   if (!o.colmap.empty() &&
-      fs::weakly_canonical(o.colmap) != fs::weakly_canonical(ws.root())) {
+      fs::weakly_canonical(o.colmap) != fs::weakly_canonical(o.workspace)) {
     throw Error("--colmap", "", o.colmap.string(),
                 "the COLMAP workspace is the workspace: leave --workspace "
                 "out or give the same folder");
@@ -258,188 +255,244 @@ RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
     throw Error("pano4d run", "--min-posed", std::to_string(o.min_posed),
                 "expected a share of the frames between 0 and 1");
   }
-  // One factor for every stage: the protocol's, unless given.
   if (!o.dataset.empty())
     o.depth.factor = LoadDataset(o.dataset, o.depth.factor).factor;
-  EnsureDirectory(ws.pano4d());
-  RemoveLeftoverTemporaries(ws.root());
-  if (!o.colmap.empty()) AdoptColmapWorkspace(ws);
-  PlanFacts facts = GatherFacts(o);
-  Plan plan = MakePlan(facts);
-  if (progress) *progress << plan.Table() << std::flush;
-  CheckPlanCanRun(o, plan);
-  RunSummary summary;
-  summary.stages = nlohmann::json::object();
-  WritePlan(ws, o, plan, summary.stages);
-  Timer total;
+  return o;
+}
 
-  // A stage's body returns its status ("done", "complete from an earlier
-  // run", ...) and why it ran or was reused; plan.json records both.
-  const auto stage = [&](const std::string& name, const auto& body) {
-    Timer t;
-    const StageResult r = body();
-    summary.stages[name] = {
-        {"status", r.status}, {"why", r.why}, {"seconds", t.WallSeconds()}};
-    WritePlan(ws, o, plan, summary.stages);
-    PANO4D_LOG(kInfo) << "run: " << name << ": " << r.status
-                      << (r.why.empty() ? "" : " (" + r.why + ")") << ", "
-                      << t.WallSeconds() << " s";
-  };
+// One run of the plan: RunPipeline's stages, each recorded in plan.json
+// with its status, why it ran or was reused, and its seconds.
+class Pipeline {
+ public:
+  Pipeline(RunOptions o, std::ostream* progress)
+      : o_(std::move(o)), ws_(o_.workspace), progress_(progress) {
+    EnsureDirectory(ws_.pano4d());
+    RemoveLeftoverTemporaries(ws_.root());
+    if (!o_.colmap.empty()) AdoptColmapWorkspace(ws_);
+    facts_ = GatherFacts(o_);
+    plan_ = MakePlan(facts_);
+    if (progress_) *progress_ << plan_.Table() << std::flush;
+    CheckPlanCanRun(o_, plan_);
+    summary_.stages = nlohmann::json::object();
+    WritePlan(ws_, o_, plan_, summary_.stages);
+  }
 
-  std::optional<SfmDiagnosis> posed;
-  std::string camera_motion = "general";
-  if (plan.Runs("sfm")) {
-    stage("sfm", [&] {
-      SfmStageOptions s;
-      s.sfm = o.sfm;
-      s.sfm.workspace = ws.root();
-      s.dataset = o.dataset;
-      s.factor = o.depth.factor;
-      const SfmStageSummary r = RunSfmStage(s);
-      if (progress) *progress << r.FullReport();
-      posed = r.report.diagnosis;
-      camera_motion = r.report.CameraMotion();
-      std::string ran;
-      for (const SfmStepReport& step : r.report.steps)
-        if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
-      return ran.empty()
-                 ? StageResult{kReused, "every step's inputs are unchanged"}
-                 : StageResult{"done", "ran " + ran};
-    });
+  void SfmStage();
+  void CheckPoses();
+  void DepthStage();
+  void MotionDecision();
+  void FitStage();
+  void EvalStage();
+  RunSummary Finish();
+
+ private:
+  void Stage(const std::string& name, const std::function<StageResult()>& body);
+  // Ends the run after sfm, its status in plan.json.
+  [[noreturn]] void StopAfterSfm(const std::string& status, Error error);
+
+  const RunOptions o_;
+  const Workspace ws_;
+  std::ostream* progress_;
+  PlanFacts facts_;
+  Plan plan_;
+  RunSummary summary_;
+  Timer total_;
+  std::optional<SfmDiagnosis> posed_;
+  std::string camera_motion_ = "general";
+};
+
+void Pipeline::Stage(const std::string& name,
+                     const std::function<StageResult()>& body) {
+  Timer t;
+  const StageResult r = body();
+  summary_.stages[name] = {
+      {"status", r.status}, {"why", r.why}, {"seconds", t.WallSeconds()}};
+  WritePlan(ws_, o_, plan_, summary_.stages);
+  PANO4D_LOG(kInfo) << "run: " << name << ": " << r.status
+                    << (r.why.empty() ? "" : " (" + r.why + ")") << ", "
+                    << t.WallSeconds() << " s";
+}
+
+void Pipeline::SfmStage() {
+  if (!plan_.Runs("sfm")) return;
+  Stage("sfm", [&] {
+    SfmStageOptions s;
+    s.sfm = o_.sfm;
+    s.sfm.workspace = ws_.root();
+    s.dataset = o_.dataset;
+    s.factor = o_.depth.factor;
+    const SfmStageSummary r = RunSfmStage(s);
+    if (progress_) *progress_ << r.FullReport();
+    posed_ = r.report.diagnosis;
+    camera_motion_ = r.report.CameraMotion();
+    std::string ran;
+    for (const SfmStepReport& step : r.report.steps)
+      if (!step.skipped) ran += (ran.empty() ? "" : ", ") + step.step;
+    return ran.empty() ? StageResult{kReused, kNothingChanged}
+                       : StageResult{"done", "ran " + ran};
+  });
+}
+
+void Pipeline::StopAfterSfm(const std::string& status, Error error) {
+  summary_.stages["sfm"]["status"] = status;
+  WritePlan(ws_, o_, plan_, summary_.stages);
+  throw error;
+}
+
+// Estimated poses: the share posed is a fact of the plan, and below
+// --min-posed the end of the run; so is a camera with one centre without
+// depth maps given.
+void Pipeline::CheckPoses() {
+  if (!posed_ || facts_.poses_given) return;
+  const SfmDiagnosis& posed = *posed_;
+  facts_.sfm_frames = posed.frames;
+  facts_.sfm_posed = posed.posed;
+  facts_.camera_motion = camera_motion_;
+  plan_ = MakePlan(facts_);
+  WritePlan(ws_, o_, plan_, summary_.stages);
+  if (posed.PosedFraction() < o_.min_posed) {
+    StopAfterSfm(
+        "too few frames posed",
+        Error("pano4d run", "sfm",
+              StringPrintf("%d of %d frames posed (%.1f%%)", posed.posed,
+                           posed.frames, 100 * posed.PosedFraction()),
+              StringPrintf("below --min-posed %.0f%%, so the fit would see a "
+                           "fraction of the video. Cause: %s. To try: %s; or "
+                           "--min-posed %.2f to fit the posed frames anyway "
+                           "(details: %s)",
+                           100 * o_.min_posed, posed.Cause().c_str(),
+                           posed.Remedy().c_str(),
+                           std::floor(100 * posed.PosedFraction()) / 100,
+                           ws_.sfm_json().c_str())));
   }
-  // Estimated poses: the share posed is a fact of the plan, and below
-  // --min-posed the end of the run.
-  if (posed && !facts.poses_given) {
-    facts.sfm_frames = posed->frames;
-    facts.sfm_posed = posed->posed;
-    facts.camera_motion = camera_motion;
-    plan = MakePlan(facts);
-    WritePlan(ws, o, plan, summary.stages);
-    if (posed->PosedFraction() < o.min_posed) {
-      summary.stages["sfm"]["status"] = "too few frames posed";
-      WritePlan(ws, o, plan, summary.stages);
-      throw Error(
-          "pano4d run", "sfm",
-          StringPrintf("%d of %d frames posed (%.1f%%)", posed->posed,
-                       posed->frames, 100 * posed->PosedFraction()),
-          StringPrintf("below --min-posed %.0f%%, so the fit would see a "
-                       "fraction of the video. Cause: %s. To try: %s; or "
-                       "--min-posed %.2f to fit the posed frames anyway "
-                       "(details: %s)",
-                       100 * o.min_posed, posed->Cause().c_str(),
-                       posed->Remedy().c_str(),
-                       std::floor(100 * posed->PosedFraction()) / 100,
-                       ws.sfm_json().c_str()));
-    }
-    // One centre: no stereo baseline and no points to align depth to, so
-    // the depth must be the user's, taken as it is.
-    if (camera_motion != "general" && o.depth.depth_dir.empty()) {
-      summary.stages["sfm"]["status"] = camera_motion;
-      WritePlan(ws, o, plan, summary.stages);
-      throw Error(
-          "pano4d run", "sfm", camera_motion,
-          (camera_motion == "static camera"
-               ? std::string("the camera stands still")
-               : std::string("the camera only turns")) +
-              ": sfm posed the frames with one centre (" +
-              (ws.sparse() / "0").string() +
-              ", no sparse points), so plane-sweep stereo has no baseline; "
-              "give depth maps with --depth-dir (one per frame, metric: "
-              "they are used as they are)");
-    }
+  // One centre: no stereo baseline and no points to align depth to, so
+  // the depth must be the user's, taken as it is.
+  if (camera_motion_ != "general" && o_.depth.depth_dir.empty()) {
+    StopAfterSfm(
+        camera_motion_,
+        Error("pano4d run", "sfm", camera_motion_,
+              (camera_motion_ == "static camera"
+                   ? std::string("the camera stands still")
+                   : std::string("the camera only turns")) +
+                  ": sfm posed the frames with one centre (" +
+                  (ws_.sparse() / "0").string() +
+                  ", no sparse points), so plane-sweep stereo has no "
+                  "baseline; give depth maps with --depth-dir (one per "
+                  "frame, metric: they are used as they are)"));
   }
-  // Reused while its stamp records the same inputs; when it runs, the fit
-  // that followed an earlier run of it starts again.
-  bool depth_ran = false;
-  stage("depth", [&] {
-    DepthOptions d = o.depth;
-    d.dataset = o.dataset;
+}
+
+// Reused while its stamp records the same inputs.
+void Pipeline::DepthStage() {
+  Stage("depth", [&] {
+    DepthOptions d = o_.depth;
+    d.dataset = o_.dataset;
     const std::optional<std::string> stale =
-        StageStamp(ws, "depth").StaleReason(DepthStageInputs(ws, d));
-    if (!stale) return StageResult{kReused, "nothing it reads changed"};
-    PANO4D_LOG(kInfo) << "run: depth runs: " << *stale;
-    depth_ran = true;
-    const DepthSummary r = RunDepth(ws, d);
+        StageStamp(ws_, "depth").Decide(DepthStageRecord(ws_, d));
+    if (!stale) return StageResult{kReused, kNothingChanged};
+    const DepthSummary r = RunDepth(ws_, d);
     PANO4D_LOG(kInfo) << "depth: " << r.BriefReport();
     std::string why = *stale;
     // Partial or failed learned depth: which frames, in the plan's results.
     if (!d.priors.empty()) why += "; " + r.BriefReport();
-    return StageResult{plan.Runs("depth") ? "estimated" : "listed", why};
+    return StageResult{plan_.Runs("depth") ? "estimated" : "listed", why};
   });
+}
 
-  // The dynamic masks exist now: the motion decision.
-  const WorkspaceFrames frames = ReadWorkspaceFrames(ws.root());
-  facts.dynamic_fraction = DynamicFraction(frames);
-  plan = MakePlan(facts);
-  PANO4D_LOG(kInfo) << "run: motion: " << plan.Get("motion").why;
-  WritePlan(ws, o, plan, summary.stages);
+// The dynamic masks exist now: the motion decision.
+void Pipeline::MotionDecision() {
+  facts_.dynamic_fraction = DynamicFraction(ReadWorkspaceFrames(ws_.root()));
+  plan_ = MakePlan(facts_);
+  PANO4D_LOG(kInfo) << "run: motion: " << plan_.Get("motion").why;
+  WritePlan(ws_, o_, plan_, summary_.stages);
+}
 
-  stage("fit", [&] {
-    FitOptions f = o.fit;
-    f.priors = o.depth.priors;
-    if (!plan.Runs("motion")) f.init.num_bases = 0;
-    if (!plan.Runs("expansion")) f.expand = false;
-    const FitOptions used = ResolveFitOptions(f, FitInputOf(frames));
-    FitInputs inputs = LoadFitInputs(ws, f.priors);
-    std::optional<std::string> mismatch =
-        depth_ran ? std::optional<std::string>("the depth stage ran again")
-                  : CheckpointMismatch(ws, used, inputs.train);
-    if (!mismatch && FitComplete(ws, used.trainer.iterations))
-      return StageResult{kReused,
-                         "a finished fit with these options on "
-                         "these frames"};
-    if (mismatch && fs::exists(ws.checkpoint())) {
+// Reused while its stamp records the same; else resumed from a checkpoint
+// made with the same options on the same frames, or started afresh.
+void Pipeline::FitStage() {
+  Stage("fit", [&] {
+    FitOptions f = o_.fit;
+    f.priors = o_.depth.priors;
+    if (!plan_.Runs("motion")) f.init.num_bases = 0;
+    if (!plan_.Runs("expansion")) f.expand = false;
+    const FitOptions used =
+        ResolveFitOptions(f, FitInputOf(ReadWorkspaceFrames(ws_.root())));
+    FitInputs inputs = LoadFitInputs(ws_, f.priors);
+    const std::optional<std::string> stale =
+        StageStamp(ws_, "fit").Decide(FitStageRecord(ws_, used, inputs.train));
+    if (!stale) return StageResult{kReused, kNothingChanged};
+    const std::optional<std::string> mismatch =
+        CheckpointMismatch(ws_, used, inputs.train);
+    if (mismatch && fs::exists(ws_.checkpoint())) {
       PANO4D_LOG(kInfo) << "run: fit: the workspace's fit is not this one's ("
                         << *mismatch << "); its products are removed and the "
                         << "fit starts from the beginning";
       // Else a fit that stops early would leave them to be taken for its
       // own: the old checkpoint resumed, the old fit.json read as complete.
-      for (const fs::path& p : {ws.checkpoint().parent_path(), ws.fit_json(),
-                                ws.expansion(), ws.panorama()})
+      for (const fs::path& p : {ws_.checkpoint().parent_path(), ws_.fit_json(),
+                                ws_.expansion(), ws_.panorama()})
         fs::remove_all(p);
     }
     f.resume = !mismatch;
     f.Check();
-    const FitSummary r = FitController(ws, f, std::move(inputs)).Run();
+    const FitSummary r = FitController(ws_, f, std::move(inputs)).Run();
     if (StopRequested()) {
       throw Error::In(
           "fit", "stopped on request (signal " + std::to_string(StopSignal()) +
-                     "); its checkpoint " + ws.checkpoint().string() +
+                     "); its checkpoint " + ws_.checkpoint().string() +
                      " is kept: run the same command again to "
                      "resume");
     }
-    if (progress) *progress << r.FullReport() << std::flush;
-    return StageResult{"done", mismatch ? *mismatch : "resumed its checkpoint"};
+    if (progress_) *progress_ << r.FullReport() << std::flush;
+    return StageResult{"done", mismatch ? *stale : "resumed its checkpoint"};
   });
+}
 
-  if (plan.Runs("eval")) {
-    stage("eval", [&] {
-      EvalOptions e;
-      e.dataset = o.dataset;
-      e.renders = ws.val_renders();
-      e.out = ws.metrics();
-      e.factor = o.depth.factor;
-      e.lpips_weights = o.lpips_weights;
-      const EvalSummary r = RunEval(e);
-      if (progress) {
-        *progress << r.markdown << "\nwritten to " << r.out.string()
-                  << ": metrics.json, metrics.md, per_frame.csv\n";
-      }
-      return StageResult{"done", ""};
-    });
+void Pipeline::EvalStage() {
+  if (!plan_.Runs("eval")) return;
+  Stage("eval", [&] {
+    EvalOptions e;
+    e.dataset = o_.dataset;
+    e.renders = ws_.val_renders();
+    e.out = ws_.metrics();
+    e.factor = o_.depth.factor;
+    e.lpips_weights = o_.lpips_weights;
+    const EvalSummary r = RunEval(e);
+    if (progress_) {
+      *progress_ << r.markdown << "\nwritten to " << r.out.string()
+                 << ": metrics.json, metrics.md, per_frame.csv\n";
+    }
+    return StageResult{"done", ""};
+  });
+}
+
+// The report, written last, and the run's summary.
+RunSummary Pipeline::Finish() {
+  summary_.report = WriteReport(ws_);
+  summary_.plan = plan_;
+  summary_.seconds = total_.WallSeconds();
+  if (progress_) {
+    *progress_ << StringPrintf(
+                      "pano4d run: done in %.1f s; plan and stage times in "
+                      "%s, the report in %s\n",
+                      summary_.seconds, ws_.plan_json().c_str(),
+                      (summary_.report.dir / "index.md").c_str())
+               << std::flush;
   }
-  summary.report = WriteReport(ws);
-  summary.plan = plan;
-  summary.seconds = total.WallSeconds();
-  if (progress) {
-    *progress << StringPrintf(
-                     "pano4d run: done in %.1f s; plan and stage times in "
-                     "%s, the report in %s\n",
-                     summary.seconds, ws.plan_json().c_str(),
-                     (summary.report.dir / "index.md").c_str())
-              << std::flush;
-  }
-  return summary;
+  return summary_;
+}
+
+}  // namespace
+
+RunSummary RunPipeline(const RunOptions& given, std::ostream* progress) {
+  Pipeline run(ResolveRunOptions(given), progress);
+  run.SfmStage();
+  run.CheckPoses();
+  run.DepthStage();
+  run.MotionDecision();
+  run.FitStage();
+  run.EvalStage();
+  return run.Finish();
 }
 
 }  // namespace pano4d

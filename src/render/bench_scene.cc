@@ -31,9 +31,8 @@ GaussianModel RandomViewFillingScene(std::size_t count,
   for (std::size_t i = 0; i < count; ++i) {
     const float z = 2.0f + 2.0f * unit(rng);
     const float u = unit(rng) * camera.width, v = unit(rng) * camera.height;
-    m.means[3 * i] = (u - camera.cx) / camera.fx * z;
-    m.means[3 * i + 1] = (v - camera.cy) / camera.fy * z;
-    m.means[3 * i + 2] = z;
+    const Eigen::Vector3f mean = camera.CameraPoint(u, v, z);
+    for (int k = 0; k < 3; ++k) m.means[3 * i + k] = mean[k];
     const float log_scale = std::log(sigma_px * z / camera.fx);
     for (int k = 0; k < 3; ++k) {
       m.log_scales[3 * i + k] = log_scale;

@@ -54,6 +54,17 @@ struct RasterCameraT {
   Eigen::Matrix<T, 3, 1> Center() const {
     return -(rotation.transpose() * translation);
   }
+  // The point at continuous pixel position (u, v) (pixel x's centre is
+  // x + 0.5) with z-depth z: in this camera's frame, computed in S (the
+  // warp works in double), and in the world.
+  template <typename S>
+  Eigen::Matrix<S, 3, 1> CameraPoint(S u, S v, S z) const {
+    return Eigen::Matrix<S, 3, 1>((u - S(cx)) / S(fx) * z,
+                                  (v - S(cy)) / S(fy) * z, z);
+  }
+  Eigen::Matrix<T, 3, 1> Unproject(T u, T v, T z) const {
+    return rotation.transpose() * (CameraPoint(u, v, z) - translation);
+  }
 };
 
 // float renders; double is for checking gradients by finite differences.

@@ -124,6 +124,10 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
         step.step == "frames" || step.step == "dynamic_masks" ||
         step.step == "feature_extractor" || step.step == "sequential_matcher";
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
+    if (step.step == "mapper")
+      EXPECT_EQ(step.why, "its output sparse/0 is gone");
+    if (step.step == "register_left_out")
+      EXPECT_EQ(step.why, "an earlier step ran");
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
 }
@@ -294,6 +298,10 @@ TEST_F(SfmTest, AFixedFrameIsNoticedAndTheRerunCompletes) {
   ASSERT_FALSE(report.steps.empty());
   EXPECT_EQ(report.steps.front().step, "frames");
   EXPECT_FALSE(report.steps.front().skipped);
+  EXPECT_NE(
+      report.steps.front().why.find(frame.filename().string() + " changed"),
+      std::string::npos)
+      << report.steps.front().why;
   EXPECT_GE(report.registered, 0.9 * report.frames);
 }
 

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/check.h"
+
 #include "src/core/error.h"
 
 namespace pano4d {
@@ -56,7 +58,7 @@ struct Fixture {
 
   GaussianScene scene;
   Adam statics, dynamics;
-  TrainerOptions options;
+  StrategyOptions options;
 };
 
 TEST(DefaultStrategyTest, ClonesSmallAndSplitsLargeGaussiansOnSchedule) {
@@ -139,21 +141,22 @@ TEST(DefaultStrategyTest, AddedAndRemovedRowsKeepStatisticsInStep) {
   EXPECT_EQ(strategy.statistics().count, (std::vector<std::int32_t>{1, 0, 0}));
   EXPECT_EQ(f.statics.rows(), 3);
   EXPECT_EQ(strategy.pruned_total(), 2);
-  EXPECT_THROW(strategy.RemoveStatic(f.Optimised(), {1}), Error);
+  EXPECT_THROW(strategy.RemoveStatic(f.Optimised(), {1}), InternalError);
   extra.sh_degree = 1;
   extra.Resize(3);
-  EXPECT_THROW(strategy.AddStatic(f.Optimised(), extra), Error);
+  EXPECT_THROW(strategy.AddStatic(f.Optimised(), extra), InternalError);
 }
 
 // Statistics are per Gaussian of the scene: a forward state of another
-// model (e.g. the refinement view's of an older scene) is refused by name.
+// model (e.g. the refinement view's of an older scene) is a bug in pano4d,
+// said with both sizes.
 TEST(DefaultStrategyTest, AStateOfAnotherSizeIsRefusedNamingBothSizes) {
   Fixture f;
   DefaultStrategy strategy(f.options, 1.0, 7);
   try {
     f.See(&strategy, 1.0f);
     FAIL() << "a state of 2 Gaussians was taken for statistics of 7";
-  } catch (const Error& e) {
+  } catch (const InternalError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("7 Gaussians"), std::string::npos) << what;
     EXPECT_NE(what.find("holds 2"), std::string::npos) << what;

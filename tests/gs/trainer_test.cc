@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "src/core/check.h"
 #include "src/core/error.h"
 #include "src/core/file.h"
 #include "src/core/hash.h"
@@ -78,8 +79,8 @@ GaussianScene Perturbed(GaussianScene scene, unsigned seed) {
 TrainerOptions FastOptions(int iterations) {
   TrainerOptions o;
   o.iterations = iterations;
-  o.densify_from = 1000000;  // no densification unless a test asks
-  o.opacity_reset_every = 1000000;
+  o.strategy.densify_from = 1000000;  // no densification unless a test asks
+  o.strategy.opacity_reset_every = 1000000;
   return o;
 }
 
@@ -279,10 +280,11 @@ TEST(TrainerTest, CheckpointResumesBitForBit) {
   GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.0f, 0.1f}, {0, 0, 0});
   TrainerOptions options = FastOptions(60);
-  options.densify_from = 10;  // densification and pruning inside the run
-  options.densify_every = 10;
-  options.densify_gradient = 1e-5;
-  options.opacity_reset_every = 25;
+  options.strategy.densify_from =
+      10;  // densification and pruning inside the run
+  options.strategy.densify_every = 10;
+  options.strategy.densify_gradient = 1e-5;
+  options.strategy.opacity_reset_every = 25;
   testing::TempDir dir;
   const auto path = dir.path() / "fit.ckpt";
 
@@ -451,15 +453,16 @@ TEST(TrainerTest, DensificationRespectsTheCap) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
   TrainerOptions options = FastOptions(40);
-  options.densify_from = 5;
-  options.densify_every = 5;
-  options.densify_gradient = 1e-7;  // everything qualifies
-  options.prune_opacity = 0;
-  options.max_gaussians = static_cast<std::int64_t>(teacher.size()) + 100;
+  options.strategy.densify_from = 5;
+  options.strategy.densify_every = 5;
+  options.strategy.densify_gradient = 1e-7;  // everything qualifies
+  options.strategy.prune_opacity = 0;
+  options.strategy.max_gaussians =
+      static_cast<std::int64_t>(teacher.size()) + 100;
   Trainer trainer(Perturbed(teacher, 4), views, options, /*seed=*/0);
   while (!trainer.Done()) trainer.Step();
   EXPECT_LE(static_cast<std::int64_t>(trainer.scene().size()),
-            options.max_gaussians);
+            options.strategy.max_gaussians);
   EXPECT_GT(trainer.densified_total(), 0);
 }
 
@@ -471,9 +474,10 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   const GaussianScene teacher = StaticTeacher();
   const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 0});
   TrainerOptions options = FastOptions(30);
-  options.densify_from = 10;  // statistics must follow the added rows
-  options.densify_every = 10;
-  options.max_gaussians = static_cast<std::int64_t>(teacher.size()) + 50;
+  options.strategy.densify_from = 10;  // statistics must follow the added rows
+  options.strategy.densify_every = 10;
+  options.strategy.max_gaussians =
+      static_cast<std::int64_t>(teacher.size()) + 50;
   Trainer trainer(Perturbed(teacher, 5), views, options, /*seed=*/0);
   for (int i = 0; i < 5; ++i) trainer.Step();
   const GaussianModel extra = RandomViewFillingScene(80, CameraAt(0), 4.0f, 9);
@@ -495,7 +499,7 @@ TEST(TrainerTest, AddedStaticGaussiansTrainAndRespectTheCap) {
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   GaussianModel wrong_degree = extra;
   wrong_degree.sh_degree = extra.sh_degree + 1;
-  EXPECT_THROW(trainer.AddStaticGaussians(wrong_degree), Error);
+  EXPECT_THROW(trainer.AddStaticGaussians(wrong_degree), InternalError);
 }
 
 // A static Gaussian may not grow wider than max_static_scale_pixels at the
@@ -546,9 +550,10 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
   teacher.logits.assign(teacher.dynamics.size(), 0.0f);
   const auto views = RenderViews(teacher, {-0.1f, 0.1f}, {0, 1});
   TrainerOptions options = FastOptions(30);
-  options.densify_from = 10;  // statistics must follow the removed rows
-  options.densify_every = 10;
-  options.densify_gradient = 1e-6;  // densify plenty
+  options.strategy.densify_from =
+      10;  // statistics must follow the removed rows
+  options.strategy.densify_every = 10;
+  options.strategy.densify_gradient = 1e-6;  // densify plenty
   Trainer trainer(Perturbed(teacher, 5), views, options, /*seed=*/0);
   for (int i = 0; i < 5; ++i) trainer.Step();
   const GaussianModel statics = trainer.scene().statics;
@@ -577,7 +582,7 @@ TEST(TrainerTest, RemovedStaticGaussiansLeaveTheRestTraining) {
   resumed.LoadCheckpoint(dir / "a.ckpt");
   EXPECT_EQ(resumed.scene().statics.size(), trainer.scene().statics.size());
   EXPECT_THROW(trainer.RemoveStaticGaussians(std::vector<std::uint8_t>(3, 1)),
-               Error);
+               InternalError);
 }
 
 TEST(TrainerTest, ExtraViewLossIsAddedThroughTheHook) {

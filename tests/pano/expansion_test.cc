@@ -72,8 +72,8 @@ std::unique_ptr<Trainer> MakeTrainer(bool surface = false, bool moving = false,
   }
   TrainerOptions o;
   o.iterations = 100;
-  o.densify_from = 1000000;
-  o.opacity_reset_every = 1000000;
+  o.strategy.densify_from = 1000000;
+  o.strategy.opacity_reset_every = 1000000;
   return std::make_unique<Trainer>(std::move(scene), std::move(views), o,
                                    /*seed=*/0);
 }

@@ -374,21 +374,21 @@ TEST_F(DepthStageTest, ItsStampNoticesAChangedImageOrModel) {
   const Workspace ws = ColmapWorkspace("stamped");
   DepthOptions o;
   const StageStamp stamp(ws, "depth");
-  EXPECT_TRUE(stamp.StaleReason(DepthStageInputs(ws, o)).has_value());
+  EXPECT_TRUE(stamp.StaleReason(DepthStageRecord(ws, o)).has_value());
   RunDepth(ws, o);
-  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)), std::nullopt);
+  EXPECT_EQ(stamp.StaleReason(DepthStageRecord(ws, o)), std::nullopt);
   const fs::path image = ws.images() / "0_00001.png";
   fs::last_write_time(image,
                       fs::last_write_time(image) + std::chrono::seconds(5));
-  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)).value_or(""),
+  EXPECT_EQ(stamp.StaleReason(DepthStageRecord(ws, o)).value_or(""),
             "images/0_00001.png changed");
   RunDepth(ws, o);
-  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)), std::nullopt);
+  EXPECT_EQ(stamp.StaleReason(DepthStageRecord(ws, o)), std::nullopt);
   fs::remove(ws.sparse() / "0" / "points3D.bin");
-  EXPECT_EQ(stamp.StaleReason(DepthStageInputs(ws, o)).value_or(""),
+  EXPECT_EQ(stamp.StaleReason(DepthStageRecord(ws, o)).value_or(""),
             "sparse/0/points3D.bin is gone");
   o.holdout = o.holdout + 1;
-  EXPECT_NE(stamp.StaleReason(DepthStageInputs(ws, o))
+  EXPECT_NE(stamp.StaleReason(DepthStageRecord(ws, o))
                 .value_or("")
                 .find("option depth.holdout"),
             std::string::npos);

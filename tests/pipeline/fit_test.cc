@@ -112,7 +112,7 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
   std::vector<TrainingView> other_frames = inputs.train;
   other_frames[0].rgb[0] += 0.5f;
   EXPECT_EQ(CheckpointMismatch(ws, used, other_frames).value_or(""),
-            "the checkpoint was written for other frames");
+            "the training frames changed");
   FitOptions other = Short(10);
   other.resume = true;
   other.init.num_bases = 3;
@@ -123,9 +123,8 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
     EXPECT_EQ(e.field(), "option init.num_bases") << e.what();
     EXPECT_EQ(e.value(), "20") << e.what();
   }
-  const std::optional<std::string> why =
-      CheckpointMismatch(ws, ResolveFitOptions(other, {kDepthFromDataset}),
-                         inputs.train);
+  const std::optional<std::string> why = CheckpointMismatch(
+      ws, ResolveFitOptions(other, {kDepthFromDataset}), inputs.train);
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("init.num_bases"), std::string::npos) << *why;
   FitOptions seed = Short(10);
@@ -137,6 +136,46 @@ TEST_F(FitControllerTest, ResumingWithAChangedOptionIsRefusedByName) {
   conduct.log_every = 1;
   conduct.checkpoint_every = 3;
   EXPECT_EQ(RunFit(ws, conduct).resumed_at, 10);
+}
+
+// The fit's reuse goes through the stages' one mechanism (src/core/
+// stamp.h): a stamp written once every iteration ran, none for a fit that
+// stopped early, and the reason it runs again when an option or the frames
+// changed.
+TEST_F(FitControllerTest, ItsStampSaysWhyItRunsAgain) {
+  const Workspace ws = Listed("ws_stamp");
+  const StageStamp stamp(ws, "fit");
+  FitController stopped(ws, Short(6), LoadFitInputs(ws));
+  stopped.Stop();
+  stopped.Run();
+  EXPECT_FALSE(fs::exists(ws.stamps() / "fit.json"));
+  RunFit(ws, Short(6));
+  const FitOptions used = ResolveFitOptions(Short(6), {kDepthFromDataset});
+  const FitInputs inputs = LoadFitInputs(ws);
+  EXPECT_EQ(stamp.StaleReason(FitStageRecord(ws, used, inputs.train)),
+            std::nullopt);
+  EXPECT_GT(stamp.Seconds(), 0.0);
+  FitOptions other = Short(6);
+  other.init.num_bases = 3;
+  EXPECT_EQ(
+      stamp
+          .StaleReason(FitStageRecord(
+              ws, ResolveFitOptions(other, {kDepthFromDataset}), inputs.train))
+          .value_or(""),
+      "option init.num_bases was 20, now 3");
+  EXPECT_EQ(stamp
+                .StaleReason(FitStageRecord(
+                    ws, ResolveFitOptions(Short(9), {kDepthFromDataset}),
+                    inputs.train))
+                .value_or(""),
+            "option iterations was 6, now 9");
+  std::vector<TrainingView> other_frames = inputs.train;
+  other_frames[0].rgb[0] += 0.5f;
+  EXPECT_EQ(stamp.StaleReason(FitStageRecord(ws, used, other_frames)),
+            "the training frames changed");
+  fs::remove(ws.checkpoint());
+  EXPECT_EQ(stamp.StaleReason(FitStageRecord(ws, used, inputs.train)),
+            "its output pano4d/checkpoints/fit.ckpt is gone");
 }
 
 }  // namespace
