@@ -116,6 +116,23 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
   for (const SfmStepReport& step : again.steps)
     EXPECT_TRUE(step.skipped) << step.step;
   EXPECT_EQ(again.registered, report.registered);
+  // The same with the stamps of a workspace from before they moved to
+  // stamps/sfm/ (logs/<step>.done.json): taken over, nothing redone.
+  const fs::path stamps = dir / "ws" / "pano4d" / "stamps" / "sfm";
+  for (const auto& entry : fs::directory_iterator(stamps)) {
+    const Json stamp = ReadJson(entry.path());
+    Json inputs = stamp["options"];
+    if (!stamp["files"].empty()) inputs["files"] = stamp["files"];
+    WriteJson(dir / "ws" / "pano4d" / "logs" /
+                  (entry.path().stem().string() + ".done.json"),
+              {{"inputs", inputs}, {"seconds", stamp["seconds"]}});
+  }
+  fs::remove_all(stamps);
+  const SfmReport adopted = RunSfm(options);
+  for (const SfmStepReport& step : adopted.steps)
+    EXPECT_TRUE(step.skipped) << step.step << ": " << step.why;
+  EXPECT_TRUE(fs::exists(stamps / "mapper.json"));
+  EXPECT_FALSE(fs::exists(dir / "ws" / "pano4d" / "logs" / "mapper.done.json"));
   // A step whose output vanished runs again, and so does every later step.
   fs::remove_all(dir / "ws" / "sparse");
   const SfmReport rebuilt = RunSfm(options);
