@@ -128,13 +128,15 @@ const ColmapPoint3D* ColmapModel::FindPoint3D(std::uint64_t point3D_id) const {
               [](const ColmapPoint3D& p) { return p.point3D_id; });
 }
 
-void ColmapModel::Check(const std::string& source) const {
-  CheckCameras(*this, source);
+namespace {
 
+// Each point3D id's index; the invalid id and repeated ids are refused.
+std::unordered_map<std::uint64_t, std::size_t> IndexPoints(
+    const ColmapModel& m, const std::string& source) {
   std::unordered_map<std::uint64_t, std::size_t> point_index;
-  point_index.reserve(points3D.size());
-  for (std::size_t i = 0; i < points3D.size(); ++i) {
-    const std::uint64_t id = points3D[i].point3D_id;
+  point_index.reserve(m.points3D.size());
+  for (std::size_t i = 0; i < m.points3D.size(); ++i) {
+    const std::uint64_t id = m.points3D[i].point3D_id;
     if (id == kInvalidPoint3DId) {
       throw Error(source, "point3D " + Id(id), "",
                   "this id is COLMAP's marker for 'no 3D point'");
@@ -144,16 +146,23 @@ void ColmapModel::Check(const std::string& source) const {
                   "point3D id appears more than once");
     }
   }
+  return point_index;
+}
 
-  // Every point2D gets a flat slot so that each observation can be matched
-  // with exactly one track element.
+// Each image id's index, its camera and its points2D's point3D ids checked;
+// first_slot[i] is image i's first point2D in one flat numbering, so that
+// each observation can be matched with exactly one track element.
+std::unordered_map<std::uint32_t, std::size_t> IndexImages(
+    const ColmapModel& m,
+    const std::unordered_map<std::uint64_t, std::size_t>& point_index,
+    const std::string& source, std::vector<std::size_t>* first_slot) {
   std::unordered_map<std::uint32_t, std::size_t> image_index;
-  std::vector<std::size_t> first_slot(images.size() + 1, 0);
+  first_slot->assign(m.images.size() + 1, 0);
   std::unordered_set<std::uint32_t> camera_ids;
-  for (const ColmapCamera& camera : cameras)
+  for (const ColmapCamera& camera : m.cameras)
     camera_ids.insert(camera.camera_id);
-  for (std::size_t i = 0; i < images.size(); ++i) {
-    const ColmapImage& image = images[i];
+  for (std::size_t i = 0; i < m.images.size(); ++i) {
+    const ColmapImage& image = m.images[i];
     const std::string name = "image " + Id(image.image_id);
     if (!image_index.emplace(image.image_id, i).second) {
       throw Error(source, name, "", "image id appears more than once");
@@ -169,12 +178,20 @@ void ColmapModel::Check(const std::string& source) const {
                     "no 3D point has this id");
       }
     }
-    first_slot[i + 1] = first_slot[i] + image.points2D.size();
+    (*first_slot)[i + 1] = (*first_slot)[i] + image.points2D.size();
   }
+  return image_index;
+}
 
-  std::vector<bool> listed(first_slot.back(), false);
+// Every track element names an existing point2D that refers back to its
+// point, once; marks those point2Ds in `listed` and returns their count.
+std::size_t CheckTracks(
+    const ColmapModel& m,
+    const std::unordered_map<std::uint32_t, std::size_t>& image_index,
+    const std::vector<std::size_t>& first_slot, const std::string& source,
+    std::vector<bool>* listed) {
   std::size_t track_elements = 0;
-  for (const ColmapPoint3D& point : points3D) {
+  for (const ColmapPoint3D& point : m.points3D) {
     const std::string name = "point3D " + Id(point.point3D_id);
     for (std::size_t k = 0; k < point.track.size(); ++k) {
       const ColmapTrackElement& element = point.track[k];
@@ -184,7 +201,7 @@ void ColmapModel::Check(const std::string& source) const {
         throw Error(source, field + " image_id", Id(element.image_id),
                     "no image has this id");
       }
-      const ColmapImage& image = images[it->second];
+      const ColmapImage& image = m.images[it->second];
       if (element.point2D_idx >= image.points2D.size()) {
         throw Error(source, field + " point2D_idx", Id(element.point2D_idx),
                     "image " + Id(image.image_id) + " has " +
@@ -198,17 +215,33 @@ void ColmapModel::Check(const std::string& source) const {
                         PointIdText(back) + ", not to this point");
       }
       const std::size_t slot = first_slot[it->second] + element.point2D_idx;
-      if (listed[slot]) {
+      if ((*listed)[slot]) {
         throw Error(source, field, "",
                     "image " + Id(image.image_id) + " point2D " +
                         Id(element.point2D_idx) +
                         " is listed twice in this track");
       }
-      listed[slot] = true;
+      (*listed)[slot] = true;
       ++track_elements;
     }
   }
-  if (track_elements == NumObservations()) return;
+  return track_elements;
+}
+
+}  // namespace
+
+void ColmapModel::Check(const std::string& source) const {
+  CheckCameras(*this, source);
+  const std::unordered_map<std::uint64_t, std::size_t> point_index =
+      IndexPoints(*this, source);
+  std::vector<std::size_t> first_slot;
+  const std::unordered_map<std::uint32_t, std::size_t> image_index =
+      IndexImages(*this, point_index, source, &first_slot);
+  std::vector<bool> listed(first_slot.back(), false);
+  if (CheckTracks(*this, image_index, first_slot, source, &listed) ==
+      NumObservations())
+    return;
+  // An observation no track lists: name the first.
   for (std::size_t i = 0; i < images.size(); ++i) {
     const ColmapImage& image = images[i];
     for (std::size_t j = 0; j < image.points2D.size(); ++j) {

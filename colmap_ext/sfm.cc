@@ -136,6 +136,82 @@ bool SameCamera(const std::vector<KnownFrame>& frames) {
   return true;
 }
 
+// A video's frames, every --stride-th up to --max-frames, named after
+// their index in the video.
+std::vector<std::string> WriteVideoFrames(const SfmOptions& o,
+                                          const fs::path& images_dir) {
+  std::vector<std::string> names;
+  VideoReader reader(o.video, {.stride = o.stride, .max_frames = o.max_frames});
+  ProgressBar bar("sfm: frames", reader.info().frame_count / o.stride);
+  Image frame;
+  std::int64_t index = 0;
+  while (reader.Next(&frame, &index)) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%06lld.png",
+                  static_cast<long long>(index));
+    WritePng8(images_dir / name, Resized(frame.ToBgr8(), o.max_size));
+    names.push_back(name);
+    bar.Add();
+  }
+  return names;
+}
+
+// The known frames (a dataset's), each checked against its camera's size.
+std::vector<std::string> WriteKnownFrames(const SfmOptions& o,
+                                          const fs::path& images_dir) {
+  std::vector<std::string> names;
+  ProgressBar bar("sfm: frames", o.known.size());
+  for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
+    if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
+      break;
+    const cv::Mat bgr = ReadImage(o.known[i].image).ToBgr8();
+    const Camera& camera = o.known[i].camera.camera;
+    if (bgr.cols != camera.width || bgr.rows != camera.height) {
+      throw Error(
+          o.known[i].image.string(), "size", SizeText(bgr.cols, bgr.rows),
+          "differs from its camera's " + SizeText(camera.width, camera.height));
+    }
+    WritePng8(images_dir / o.known[i].name, Resized(bgr, o.max_size));
+    names.push_back(o.known[i].name);
+    bar.Add(o.stride);
+  }
+  return names;
+}
+
+// A folder's images in number order. COLMAP and pano4d's later stages
+// order frames by name as bytes: names that do not sort in time order
+// (frame_2, frame_10) get their position in front (000001_frame_2).
+std::vector<std::string> WriteFolderFrames(const SfmOptions& o,
+                                           const fs::path& images_dir) {
+  std::vector<fs::path> files = ListImages(o.images);
+  std::vector<fs::path> kept;
+  for (std::size_t i = 0; i < files.size(); i += o.stride) {
+    if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
+      break;
+    kept.push_back(files[i]);
+  }
+  std::vector<std::string> stems;
+  for (const fs::path& f : kept) stems.push_back(f.stem().string());
+  const bool prefix = !std::is_sorted(stems.begin(), stems.end());
+  if (prefix) {
+    PANO4D_LOG(kInfo) << "sfm: the frames' names do not sort in their "
+                         "number order; numbered 000000_"
+                      << stems.front() << ".png on";
+  }
+  std::vector<std::string> names;
+  ProgressBar bar("sfm: frames", kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    const Image image = ReadImage(kept[i]);
+    const std::string name =
+        (prefix ? ZeroPadded(static_cast<std::int64_t>(i), 6) + "_" : "") +
+        stems[i] + ".png";
+    WritePng8(images_dir / name, Resized(image.ToBgr8(), o.max_size));
+    names.push_back(name);
+    bar.Add();
+  }
+  return names;
+}
+
 // Frames into WS/images as PNG (lossless, and COLMAP reads them), named
 // after the video frame index or kept from the source folder.
 std::vector<std::string> WriteFrames(const SfmOptions& o,
@@ -156,69 +232,10 @@ std::vector<std::string> WriteFrames(const SfmOptions& o,
   }
   fs::remove_all(images_dir);
   EnsureDirectory(images_dir);
-  std::vector<std::string> names;
-  if (!o.video.empty()) {
-    VideoReader reader(o.video,
-                       {.stride = o.stride, .max_frames = o.max_frames});
-    ProgressBar bar("sfm: frames", reader.info().frame_count / o.stride);
-    Image frame;
-    std::int64_t index = 0;
-    while (reader.Next(&frame, &index)) {
-      char name[32];
-      std::snprintf(name, sizeof(name), "frame_%06lld.png",
-                    static_cast<long long>(index));
-      WritePng8(images_dir / name, Resized(frame.ToBgr8(), o.max_size));
-      names.push_back(name);
-      bar.Add();
-    }
-  } else if (!o.known.empty()) {
-    ProgressBar bar("sfm: frames", o.known.size());
-    for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
-      if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
-        break;
-      const cv::Mat bgr = ReadImage(o.known[i].image).ToBgr8();
-      const Camera& camera = o.known[i].camera.camera;
-      if (bgr.cols != camera.width || bgr.rows != camera.height) {
-        throw Error(o.known[i].image.string(), "size",
-                    SizeText(bgr.cols, bgr.rows),
-                    "differs from its camera's " +
-                        SizeText(camera.width, camera.height));
-      }
-      WritePng8(images_dir / o.known[i].name, Resized(bgr, o.max_size));
-      names.push_back(o.known[i].name);
-      bar.Add(o.stride);
-    }
-  } else {
-    std::vector<fs::path> files;
-    for (const fs::path& f : ListImages(o.images)) files.push_back(f);
-    std::vector<fs::path> kept;
-    for (std::size_t i = 0; i < files.size(); i += o.stride) {
-      if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
-        break;
-      kept.push_back(files[i]);
-    }
-    // COLMAP and pano4d's later stages order frames by name as bytes:
-    // names that do not sort in time order (frame_2, frame_10) get their
-    // position in front (000001_frame_2).
-    std::vector<std::string> stems;
-    for (const fs::path& f : kept) stems.push_back(f.stem().string());
-    const bool prefix = !std::is_sorted(stems.begin(), stems.end());
-    if (prefix) {
-      PANO4D_LOG(kInfo) << "sfm: the frames' names do not sort in their "
-                           "number order; numbered 000000_"
-                        << stems.front() << ".png on";
-    }
-    ProgressBar bar("sfm: frames", kept.size());
-    for (std::size_t i = 0; i < kept.size(); ++i) {
-      const Image image = ReadImage(kept[i]);
-      const std::string name =
-          (prefix ? ZeroPadded(static_cast<std::int64_t>(i), 6) + "_" : "") +
-          stems[i] + ".png";
-      WritePng8(images_dir / name, Resized(image.ToBgr8(), o.max_size));
-      names.push_back(name);
-      bar.Add();
-    }
-  }
+  const std::vector<std::string> names =
+      !o.video.empty()   ? WriteVideoFrames(o, images_dir)
+      : !o.known.empty() ? WriteKnownFrames(o, images_dir)
+                         : WriteFolderFrames(o, images_dir);
   if (names.size() < 2) {
     throw Error::In(!o.video.empty()    ? o.video.string()
                     : !o.images.empty() ? o.images.string()

@@ -122,6 +122,144 @@ const char* MetricFormat(std::size_t key) {
   return name.find("psnr") != std::string::npos ? "%.2f" : "%.3f";
 }
 
+namespace {
+
+// Each frame's render, all of them there before any scoring: a mean over
+// the frames that happen to exist would not be comparable with anyone's
+// numbers.
+std::vector<fs::path> RequireRenders(const std::vector<DatasetFrame>& frames,
+                                     const fs::path& renders,
+                                     const std::string& split) {
+  if (!fs::is_directory(renders))
+    throw Error::In(renders.string(), "is not a directory of renders");
+  std::vector<fs::path> render_paths;
+  int missing = 0;
+  std::string first_missing;
+  for (const DatasetFrame& f : frames) {
+    render_paths.push_back(RenderPath(renders, f.id));
+    if (render_paths.back().empty() && missing++ == 0) first_missing = f.id;
+  }
+  if (missing > 0) {
+    throw Error::In(renders.string(),
+                    std::to_string(missing) + " of " +
+                        std::to_string(frames.size()) +
+                        " renders are missing (first: " + first_missing +
+                        ".png); render every " + split + " frame");
+  }
+  return render_paths;
+}
+
+// What a frame's covisible mask left out: frames with one, and those whose
+// mask leaves no covisible or no unseen pixel.
+struct MaskCounts {
+  int with_mask = 0, empty_covisible = 0, empty_unseen = 0;
+};
+
+// One frame's metrics: on every pixel, and with a covisible mask on the
+// covisible (m*) and unseen (u*) pixels.
+FrameMetrics ScoreFrame(const DatasetFrame& f, const fs::path& render_path,
+                        const std::optional<Lpips>& lpips, MaskCounts* counts) {
+  const Image truth = ReadImage(f.rgb);
+  const Image render = ReadImage(render_path);
+  if (render.width() != truth.width() || render.height() != truth.height()) {
+    throw Error(render_path.string(), "size", Size(render),
+                "expected " + Size(truth) + " like " + f.rgb.string());
+  }
+  const cv::Mat a = QuantizeForMetrics(render, render_path.string());
+  const cv::Mat b = QuantizeForMetrics(truth, f.rgb.string());
+  FrameMetrics m;
+  m.id = f.id;
+  m.camera_id = f.camera_id;
+  m.time_id = f.time_id;
+  m.values[kPsnr] = Psnr(a, b);
+  m.values[kSsim] = Ssim(a, b)->dycheck;
+  // LPIPS of this render (a failure names it).
+  const auto lpips_score = [&](const cv::Mat& mask) {
+    try {
+      return lpips->Score(a, b, mask);
+    } catch (const Error& e) {
+      throw Error(render_path.string(), "lpips", "", e.what());
+    }
+  };
+  if (lpips) m.values[kLpips] = lpips_score({});
+  if (f.covisible.empty()) return m;
+  ++counts->with_mask;
+  const cv::Mat raw = ReadMask(f.covisible);
+  if (raw.size() != truth.mat().size()) {
+    throw Error(f.covisible.string(), "size", SizeText(raw.cols, raw.rows),
+                "expected " + Size(truth) + " like " + f.rgb.string());
+  }
+  const cv::Mat covisible = MetricMask(raw, f.covisible.string());
+  const cv::Mat unseen = InvertMask(covisible);
+  m.covisible_fraction = cv::mean(covisible)[0];
+  m.values[kMpsnr] = Psnr(a, b, covisible);
+  m.values[kUpsnr] = Psnr(a, b, unseen);
+  if (lpips) {
+    m.values[kMlpips] = lpips_score(covisible);
+    m.values[kUlpips] = lpips_score(unseen);
+  }
+  if (const auto s = Ssim(a, b, covisible)) {
+    m.values[kMssim] = s->dycheck;
+    m.values[kMssimStrict] = s->strict;
+  } else {
+    ++counts->empty_covisible;
+  }
+  if (const auto s = Ssim(a, b, unseen)) {
+    m.values[kUssim] = s->dycheck;
+    m.values[kUssimStrict] = s->strict;
+  } else {
+    ++counts->empty_unseen;
+  }
+  return m;
+}
+
+// What a reader of the means must know: the LPIPS weights, DyCheck's SSIM,
+// which frames m* and u* cover, infinite PSNR.
+std::vector<std::string> EvaluationNotes(const EvaluationResult& result,
+                                         const EvaluateOptions& options,
+                                         bool lpips, const MaskCounts& counts) {
+  std::vector<std::string> notes;
+  notes.push_back(
+      lpips ? "LPIPS: AlexNet v0.1, the spatial map averaged over the mask "
+              "with both images multiplied by it (as DyCheck); weights from " +
+                  options.lpips_weights.string()
+            : std::string("LPIPS: n/a, no AlexNet LPIPS weights were given "
+                          "(--lpips-weights; see "
+                          "scripts/lpips_weights_from_torch.py)"));
+  notes.push_back(
+      "SSIM columns are DyCheck's masked SSIM, in which windows wholly outside "
+      "the mask count as "
+      "1.0; mssim_strict and ussim_strict average only windows that touch the "
+      "mask");
+  const int frames = static_cast<int>(result.frames.size());
+  if (counts.with_mask == 0) {
+    notes.push_back(
+        "m* and u*: n/a, the dataset has no covisible masks for this split");
+  } else if (counts.with_mask < frames) {
+    notes.push_back("m* and u* are over the " +
+                    std::to_string(counts.with_mask) +
+                    " frames that have a covisible mask");
+  }
+  if (counts.empty_covisible > 0 || counts.empty_unseen > 0) {
+    notes.push_back(
+        std::to_string(counts.empty_unseen) +
+        " frames have no unseen pixel and " +
+        std::to_string(counts.empty_covisible) +
+        " no covisible pixel; they are left out of u* and m* respectively");
+  }
+  for (const FrameMetrics& m : result.frames) {
+    if (m.values[kPsnr] && std::isinf(*m.values[kPsnr])) {
+      notes.push_back(
+          "some frames are identical to the ground truth (PSNR +inf); JSON "
+          "holds null for infinite values");
+      break;
+    }
+  }
+  return notes;
+}
+
+}  // namespace
+
 EvaluationResult EvaluateRenders(const Dataset& dataset,
                                  const fs::path& renders,
                                  const EvaluateOptions& options) {
@@ -138,25 +276,8 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
     throw Error(dataset.root.string(), "split", options.split,
                 "has no frames to evaluate");
   }
-  if (!fs::is_directory(renders))
-    throw Error::In(renders.string(), "is not a directory of renders");
-
-  // Every render must be there before any scoring: a mean over the frames
-  // that happen to exist would not be comparable with anyone's numbers.
-  std::vector<fs::path> render_paths;
-  int missing = 0;
-  std::string first_missing;
-  for (const DatasetFrame& f : frames) {
-    render_paths.push_back(RenderPath(renders, f.id));
-    if (render_paths.back().empty() && missing++ == 0) first_missing = f.id;
-  }
-  if (missing > 0) {
-    throw Error::In(renders.string(),
-                    std::to_string(missing) + " of " +
-                        std::to_string(frames.size()) +
-                        " renders are missing (first: " + first_missing +
-                        ".png); render every " + options.split + " frame");
-  }
+  const std::vector<fs::path> render_paths =
+      RequireRenders(frames, renders, options.split);
 
   EvaluationResult result;
   result.dataset = dataset.root.string();
@@ -167,62 +288,10 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
   result.factor = dataset.factor;
   ProgressBar progress("eval " + options.split,
                        static_cast<std::int64_t>(frames.size()));
-  int with_mask = 0, empty_covisible = 0, empty_unseen = 0;
+  MaskCounts counts;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    const DatasetFrame& f = frames[i];
-    const Image truth = ReadImage(f.rgb);
-    const Image render = ReadImage(render_paths[i]);
-    if (render.width() != truth.width() || render.height() != truth.height()) {
-      throw Error(render_paths[i].string(), "size", Size(render),
-                  "expected " + Size(truth) + " like " + f.rgb.string());
-    }
-    const cv::Mat a = QuantizeForMetrics(render, render_paths[i].string());
-    const cv::Mat b = QuantizeForMetrics(truth, f.rgb.string());
-    FrameMetrics m;
-    m.id = f.id;
-    m.camera_id = f.camera_id;
-    m.time_id = f.time_id;
-    m.values[kPsnr] = Psnr(a, b);
-    m.values[kSsim] = Ssim(a, b)->dycheck;
-    // LPIPS of this render (a failure names it).
-    const auto lpips_score = [&](const cv::Mat& mask) {
-      try {
-        return lpips->Score(a, b, mask);
-      } catch (const Error& e) {
-        throw Error(render_paths[i].string(), "lpips", "", e.what());
-      }
-    };
-    if (lpips) m.values[kLpips] = lpips_score({});
-    if (!f.covisible.empty()) {
-      ++with_mask;
-      const cv::Mat raw = ReadMask(f.covisible);
-      if (raw.size() != truth.mat().size()) {
-        throw Error(f.covisible.string(), "size", SizeText(raw.cols, raw.rows),
-                    "expected " + Size(truth) + " like " + f.rgb.string());
-      }
-      const cv::Mat covisible = MetricMask(raw, f.covisible.string());
-      const cv::Mat unseen = InvertMask(covisible);
-      m.covisible_fraction = cv::mean(covisible)[0];
-      m.values[kMpsnr] = Psnr(a, b, covisible);
-      m.values[kUpsnr] = Psnr(a, b, unseen);
-      if (lpips) {
-        m.values[kMlpips] = lpips_score(covisible);
-        m.values[kUlpips] = lpips_score(unseen);
-      }
-      if (const auto s = Ssim(a, b, covisible)) {
-        m.values[kMssim] = s->dycheck;
-        m.values[kMssimStrict] = s->strict;
-      } else {
-        ++empty_covisible;
-      }
-      if (const auto s = Ssim(a, b, unseen)) {
-        m.values[kUssim] = s->dycheck;
-        m.values[kUssimStrict] = s->strict;
-      } else {
-        ++empty_unseen;
-      }
-    }
-    result.frames.push_back(m);
+    result.frames.push_back(
+        ScoreFrame(frames[i], render_paths[i], lpips, &counts));
     progress.Add();
   }
   progress.Finish();
@@ -239,41 +308,7 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
     result.frames_used[k] = n;
     if (n > 0) result.mean[k] = sum / n;
   }
-
-  result.notes.push_back(
-      lpips ? "LPIPS: AlexNet v0.1, the spatial map averaged over the mask "
-              "with both images multiplied by it (as DyCheck); weights from " +
-                  options.lpips_weights.string()
-            : std::string("LPIPS: n/a, no AlexNet LPIPS weights were given "
-                          "(--lpips-weights; see "
-                          "scripts/lpips_weights_from_torch.py)"));
-  result.notes.push_back(
-      "SSIM columns are DyCheck's masked SSIM, in which windows wholly outside "
-      "the mask count as "
-      "1.0; mssim_strict and ussim_strict average only windows that touch the "
-      "mask");
-  if (with_mask == 0) {
-    result.notes.push_back(
-        "m* and u*: n/a, the dataset has no covisible masks for this split");
-  } else if (with_mask < static_cast<int>(frames.size())) {
-    result.notes.push_back("m* and u* are over the " +
-                           std::to_string(with_mask) +
-                           " frames that have a covisible mask");
-  }
-  if (empty_covisible > 0 || empty_unseen > 0) {
-    result.notes.push_back(
-        std::to_string(empty_unseen) + " frames have no unseen pixel and " +
-        std::to_string(empty_covisible) +
-        " no covisible pixel; they are left out of u* and m* respectively");
-  }
-  for (const FrameMetrics& m : result.frames) {
-    if (m.values[kPsnr] && std::isinf(*m.values[kPsnr])) {
-      result.notes.push_back(
-          "some frames are identical to the ground truth (PSNR +inf); JSON "
-          "holds null for infinite values");
-      break;
-    }
-  }
+  result.notes = EvaluationNotes(result, options, lpips.has_value(), counts);
   return result;
 }
 

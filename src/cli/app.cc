@@ -17,6 +17,85 @@
 #include "src/core/workspace_lock.h"
 
 namespace pano4d::cli {
+namespace {
+
+// The options every command takes, before or after its name.
+struct GlobalOptions {
+  std::string log_level = "info";
+  bool verbose = false;
+  bool quiet = false;
+  int threads = 0;
+};
+
+void AddGlobalOptions(CLI::App& app, GlobalOptions* g) {
+  app.add_option("--log-level", g->log_level, "debug, info, warning or error")
+      ->check(CLI::IsMember({"debug", "info", "warning", "warn", "error"}))
+      ->capture_default_str();
+  app.add_flag("-v,--verbose", g->verbose, "Same as --log-level debug");
+  app.add_flag("-q,--quiet", g->quiet, "Same as --log-level warning");
+  app.add_option("--threads", g->threads,
+                 "Threads for pano4d's parallel loops; 0: one per core. On "
+                 "a machine shared with other work, fewer leave it cores "
+                 "(waiting threads sleep rather than spin)")
+      ->check(NonNegative())
+      ->capture_default_str();
+  // Global options may follow the subcommand: `pano4d fit -q --threads 1`.
+  app.fallthrough();
+}
+
+void AddCommands(CLI::App& app, Action* action) {
+  AddInspectCommand(app, action);
+  AddBenchCommand(app, action);
+  AddDatasetCommand(app, action);
+  AddSynthCommand(app, action);
+  AddEvalCommand(app, action);
+  AddPlotCommand(app, action);
+  AddSfmCommand(app, action);
+  AddDepthCommand(app, action);
+  AddFitCommand(app, action);
+  AddExpandCommand(app, action);
+  AddMakePairsCommand(app, action);
+  AddRunCommand(app, action);
+  AddDemoCommand(app, action);
+  AddRenderCommand(app, action);
+  AddExportCommand(app, action);
+  AddViewCommand(app, action);
+  AddSweepCommand(app, action);
+}
+
+void ApplyGlobalOptions(const GlobalOptions& g) {
+  SetLogLevel(g.verbose ? LogLevel::kDebug
+              : g.quiet ? LogLevel::kWarning
+                        : ParseLogLevel(g.log_level).value_or(LogLevel::kInfo));
+  if (g.threads <= 0) return;
+  omp_set_num_threads(g.threads);
+  const int cores = omp_get_num_procs();
+  if (g.threads > cores) {
+    PANO4D_LOG(kWarning)
+        << "--threads " << g.threads << " is more than this machine's " << cores
+        << " cores: every parallel loop then waits for threads "
+        << "that share a core, which is slower, not faster; use at most "
+        << cores;
+  }
+}
+
+// Runs the command, its errors said on stderr with the exit status they
+// call for.
+int RunAction(const Action& action) {
+  try {
+    return action();
+  } catch (const Error& e) {
+    std::cerr << "pano4d: error: " << e.what() << "\n";
+  } catch (const InternalError& e) {
+    std::cerr << "pano4d: internal error: " << e.what() << "\n";
+    return kExitBug;
+  } catch (const std::exception& e) {
+    std::cerr << "pano4d: error: " << e.what() << "\n";
+  }
+  return StopRequested() ? kExitStopped : kExitError;
+}
+
+}  // namespace
 
 int Main(int argc, char** argv) {
   CLI::App app{
@@ -30,43 +109,10 @@ int Main(int argc, char** argv) {
       "Exit status: 0 ok, 1 error (the message names the input), 64 usage "
       "error, 75 stopped on request (SIGUSR1) with its state saved: run it "
       "again (fit: with --resume).");
-
-  std::string log_level = "info";
-  app.add_option("--log-level", log_level, "debug, info, warning or error")
-      ->check(CLI::IsMember({"debug", "info", "warning", "warn", "error"}))
-      ->capture_default_str();
-  bool verbose = false;
-  bool quiet = false;
-  app.add_flag("-v,--verbose", verbose, "Same as --log-level debug");
-  app.add_flag("-q,--quiet", quiet, "Same as --log-level warning");
-  int threads = 0;
-  app.add_option("--threads", threads,
-                 "Threads for pano4d's parallel loops; 0: one per core. On "
-                 "a machine shared with other work, fewer leave it cores "
-                 "(waiting threads sleep rather than spin)")
-      ->check(NonNegative())
-      ->capture_default_str();
-  // Global options may follow the subcommand: `pano4d fit -q --threads 1`.
-  app.fallthrough();
-
+  GlobalOptions global;
+  AddGlobalOptions(app, &global);
   Action action;
-  AddInspectCommand(app, &action);
-  AddBenchCommand(app, &action);
-  AddDatasetCommand(app, &action);
-  AddSynthCommand(app, &action);
-  AddEvalCommand(app, &action);
-  AddPlotCommand(app, &action);
-  AddSfmCommand(app, &action);
-  AddDepthCommand(app, &action);
-  AddFitCommand(app, &action);
-  AddExpandCommand(app, &action);
-  AddMakePairsCommand(app, &action);
-  AddRunCommand(app, &action);
-  AddDemoCommand(app, &action);
-  AddRenderCommand(app, &action);
-  AddExportCommand(app, &action);
-  AddViewCommand(app, &action);
-  AddSweepCommand(app, &action);
+  AddCommands(app, &action);
   RefuseNonFiniteAndEmptyValues(&app);
 
   SetThisCommandLine(argc, argv);  // a workspace lock names its holder
@@ -82,36 +128,12 @@ int Main(int argc, char** argv) {
     app.exit(e);
     return kExitUsage;
   }
-
-  SetLogLevel(verbose ? LogLevel::kDebug
-              : quiet ? LogLevel::kWarning
-                      : ParseLogLevel(log_level).value_or(LogLevel::kInfo));
-  if (threads > 0) {
-    omp_set_num_threads(threads);
-    const int cores = omp_get_num_procs();
-    if (threads > cores) {
-      PANO4D_LOG(kWarning)
-          << "--threads " << threads << " is more than this machine's " << cores
-          << " cores: every parallel loop then waits for threads "
-          << "that share a core, which is slower, not faster; use at most "
-          << cores;
-    }
-  }
+  ApplyGlobalOptions(global);
   if (!action) {
     std::cout << app.help();
     return kExitUsage;
   }
-  try {
-    return action();
-  } catch (const Error& e) {
-    std::cerr << "pano4d: error: " << e.what() << "\n";
-  } catch (const InternalError& e) {
-    std::cerr << "pano4d: internal error: " << e.what() << "\n";
-    return kExitBug;
-  } catch (const std::exception& e) {
-    std::cerr << "pano4d: error: " << e.what() << "\n";
-  }
-  return StopRequested() ? kExitStopped : kExitError;
+  return RunAction(action);
 }
 
 }  // namespace pano4d::cli

@@ -14,14 +14,64 @@
 #include "src/pipeline/fit.h"
 
 namespace pano4d::cli {
+namespace {
+
+struct FitCommandOptions {
+  std::filesystem::path workspace;
+  FitOptions fit;
+  bool force = false;
+};
+
+// The command: a workspace that holds a fit is refused without --resume or
+// --force; with --force the previous fit is kept until the new one
+// completes.
+int RunFitCommand(const FitCommandOptions& o) {
+  const FolderLock lock = LockWorkspace(o.workspace);
+  const Workspace ws(o.workspace);
+  RemoveLeftoverTemporaries(ws.root());
+  std::filesystem::path backup;
+  if (!o.fit.resume && std::filesystem::exists(ws.checkpoint())) {
+    if (!o.force) {
+      throw Error::In(ws.checkpoint().string(),
+                      "holds a fit already: --resume continues it, --force "
+                      "starts again (keeping it in " +
+                          ws.previous_fit().string() +
+                          " until the new fit completes)");
+    }
+    backup = BackUpPreviousFit(ws);
+    PANO4D_LOG(kInfo) << "fit: --force: the previous fit is kept in "
+                      << backup.string() << " until this one completes";
+  }
+  FitSummary s;
+  try {
+    s = RunFit(ws, o.fit);
+  } catch (...) {
+    if (!backup.empty()) {
+      PANO4D_LOG(kError) << "fit: the previous fit is kept in "
+                         << backup.string();
+    }
+    throw;
+  }
+  if (s.termination == FitTermination::kStopped && StopRequested()) {
+    // Stopped by the signal before its end: the previous fit's backup
+    // stays (RunFit writes no fit.json), and exit 75 says "run again".
+    std::printf("%s", s.FullReport().c_str());
+    std::printf(
+        "pano4d fit: stopped on request at iteration %lld; the checkpoint "
+        "%s continues with `pano4d fit --workspace %s --resume`\n",
+        static_cast<long long>(s.iterations), ws.checkpoint().c_str(),
+        o.workspace.c_str());
+    return kExitStopped;
+  }
+  if (!backup.empty()) std::filesystem::remove_all(backup);
+  std::printf("%s", s.FullReport().c_str());
+  return kExitOk;
+}
+
+}  // namespace
 
 void AddFitCommand(CLI::App& app, Action* action) {
-  struct Options {
-    std::filesystem::path workspace;
-    FitOptions fit;
-    bool force = false;
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<FitCommandOptions>();
   CLI::App* sub = app.add_subcommand(
       "fit",
       "Fit the dynamic 4D Gaussians to the frames of `pano4d depth` (CPU "
@@ -54,50 +104,7 @@ void AddFitCommand(CLI::App& app, Action* action) {
       "masks M_e, refined frames; trajectories.json; colmap/ with the "
       "training and expanded cameras) and WS/pano4d/panorama/ (one "
       "equirectangular PNG per time step and static.png).");
-  sub->callback([action, o] {
-    *action = [o] {
-      const FolderLock lock = LockWorkspace(o->workspace);
-      const Workspace ws(o->workspace);
-      RemoveLeftoverTemporaries(ws.root());
-      std::filesystem::path backup;
-      if (!o->fit.resume && std::filesystem::exists(ws.checkpoint())) {
-        if (!o->force) {
-          throw Error::In(ws.checkpoint().string(),
-                          "holds a fit already: --resume continues it, --force "
-                          "starts again (keeping it in " +
-                              ws.previous_fit().string() +
-                              " until the new fit completes)");
-        }
-        backup = BackUpPreviousFit(ws);
-        PANO4D_LOG(kInfo) << "fit: --force: the previous fit is kept in "
-                          << backup.string() << " until this one completes";
-      }
-      FitSummary s;
-      try {
-        s = RunFit(ws, o->fit);
-      } catch (...) {
-        if (!backup.empty()) {
-          PANO4D_LOG(kError)
-              << "fit: the previous fit is kept in " << backup.string();
-        }
-        throw;
-      }
-      if (s.termination == FitTermination::kStopped && StopRequested()) {
-        // Stopped by the signal before its end: the previous fit's backup
-        // stays (RunFit writes no fit.json), and exit 75 says "run again".
-        std::printf("%s", s.FullReport().c_str());
-        std::printf(
-            "pano4d fit: stopped on request at iteration %lld; the checkpoint "
-            "%s continues with `pano4d fit --workspace %s --resume`\n",
-            static_cast<long long>(s.iterations), ws.checkpoint().c_str(),
-            o->workspace.c_str());
-        return kExitStopped;
-      }
-      if (!backup.empty()) std::filesystem::remove_all(backup);
-      std::printf("%s", s.FullReport().c_str());
-      return kExitOk;
-    };
-  });
+  sub->callback([action, o] { *action = [o] { return RunFitCommand(*o); }; });
 }
 
 }  // namespace pano4d::cli

@@ -9,14 +9,9 @@
 
 namespace pano4d::cli {
 namespace fs = std::filesystem;
+namespace {
 
-void AddSweepCommand(CLI::App& app, Action* action) {
-  CLI::App* sweep = app.add_subcommand(
-      "sweep",
-      "Benchmark sweeps (scenes x seeds x configurations) as Slurm job "
-      "arrays, Kubernetes Indexed Jobs or a local process pool");
-  sweep->require_subcommand(1);
-
+void AddPlan(CLI::App* sweep, Action* action) {
   auto plan = std::make_shared<SweepPlanOptions>();
   CLI::App* p = sweep->add_subcommand(
       "plan",
@@ -57,7 +52,9 @@ void AddSweepCommand(CLI::App& app, Action* action) {
       return kExitOk;
     };
   });
+}
 
+void AddRun(CLI::App* sweep, Action* action) {
   struct Run {
     fs::path sweep;
     int index = -1;
@@ -92,7 +89,9 @@ void AddSweepCommand(CLI::App& app, Action* action) {
       return kExitError;
     };
   });
+}
 
+void AddSbatch(CLI::App* sweep, Action* action) {
   struct Sbatch {
     fs::path sweep;
     SbatchOptions options;
@@ -124,7 +123,9 @@ void AddSweepCommand(CLI::App& app, Action* action) {
       return kExitOk;
     };
   });
+}
 
+void AddLocal(CLI::App* sweep, Action* action) {
   struct Local {
     fs::path sweep;
     int jobs = 1;
@@ -148,7 +149,9 @@ void AddSweepCommand(CLI::App& app, Action* action) {
       return not_done == 0 ? kExitOk : kExitError;
     };
   });
+}
 
+void AddCollect(CLI::App* sweep, Action* action) {
   auto collect = std::make_shared<fs::path>();
   CLI::App* c = sweep->add_subcommand(
       "collect", "Merge every entry's metrics into SWEEP/sweep.md and .csv");
@@ -166,6 +169,21 @@ void AddSweepCommand(CLI::App& app, Action* action) {
       return kExitOk;
     };
   });
+}
+
+}  // namespace
+
+void AddSweepCommand(CLI::App& app, Action* action) {
+  CLI::App* sweep = app.add_subcommand(
+      "sweep",
+      "Benchmark sweeps (scenes x seeds x configurations) as Slurm job "
+      "arrays, Kubernetes Indexed Jobs or a local process pool");
+  sweep->require_subcommand(1);
+  AddPlan(sweep, action);
+  AddRun(sweep, action);
+  AddSbatch(sweep, action);
+  AddLocal(sweep, action);
+  AddCollect(sweep, action);
 }
 
 }  // namespace pano4d::cli

@@ -553,88 +553,101 @@ std::optional<FlowPrior> ReadFlowPrior(const PriorsFolder& folder,
   return prior;
 }
 
-std::optional<TrackPrior> ReadTrackPrior(const PriorsFolder& folder,
-                                         const std::vector<PriorFrame>& frames,
-                                         int source_width, int source_height) {
-  const std::vector<const PriorLayout*> layouts = folder.Of(PriorKind::kTracks);
-  if (layouts.empty()) return std::nullopt;
-  const PriorLayout& layout = *layouts.front();
-  const int n_frames = static_cast<int>(frames.size());
-  TrackPrior prior;
-  prior.layout = &layout;
-  prior.num_frames = n_frames;
-  // The scale from the tracker's pixels to each frame's.
-  const auto scale = [&](int i) {
-    const PriorFrame& f = frames[i];
-    const double w = source_width > 0 ? source_width : f.width;
-    const double h = source_height > 0 ? source_height : f.height;
+namespace {
+
+// Appends tracks to a TrackPrior: positions per frame in the tracker's
+// pixels, scaled to each frame's (the tracker's size: the other priors',
+// else the frame's own).
+class TrackAppender {
+ public:
+  TrackAppender(const std::vector<PriorFrame>& frames, int source_width,
+                int source_height, TrackPrior* prior)
+      : frames_(frames), w_(source_width), h_(source_height), prior_(prior) {}
+
+  // One track: `at(t, &p)` says whether frame t sees it and where.
+  void Add(const std::function<bool(int, Eigen::Vector2f*)>& at) {
+    for (int t = 0; t < static_cast<int>(frames_.size()); ++t) {
+      Eigen::Vector2f p(0, 0);
+      const bool seen = at(t, &p) && frames_[t].used;
+      prior_->pixels.push_back(p.cwiseProduct(Scale(t)));
+      prior_->visible.push_back(seen ? 1 : 0);
+    }
+  }
+
+ private:
+  Eigen::Vector2f Scale(int i) const {
+    const PriorFrame& f = frames_[i];
+    const double w = w_ > 0 ? w_ : f.width;
+    const double h = h_ > 0 ? h_ : f.height;
     return Eigen::Vector2f(static_cast<float>(f.width / w),
                            static_cast<float>(f.height / h));
-  };
-  // Appends one track: positions per frame in the tracker's pixels.
-  const auto add = [&](const std::function<bool(int, Eigen::Vector2f*)>& at) {
-    for (int t = 0; t < n_frames; ++t) {
-      Eigen::Vector2f p(0, 0);
-      const bool seen = at(t, &p) && frames[t].used;
-      prior.pixels.push_back(p.cwiseProduct(scale(t)));
-      prior.visible.push_back(seen ? 1 : 0);
-    }
-  };
-  if (layout.name.starts_with("Shape of Motion")) {
-    // bootstapir/<q>_<t>.npy: frame q's queries at frame t.
-    const FrameKeys keys(frames);
-    std::map<int, std::map<int, fs::path>> by_query;
-    for (const fs::path& file : FilesIn(layout.path, ".npy")) {
-      const std::string stem = file.stem().string();
-      int q = -1, t = -1;
-      for (std::size_t pos = stem.find('_'); pos != std::string::npos;
-           pos = stem.find('_', pos + 1)) {
-        q = keys.Find(stem.substr(0, pos));
-        t = keys.Find(stem.substr(pos + 1));
-        if (q >= 0 && t >= 0) break;
-      }
-      if (q < 0 || t < 0) {
-        throw Error(file.string(), "frames", stem,
-                    "does not name two frames of this video as <q>_<t> (its "
-                    "frames are named like " +
-                        keys.Examples() + ")");
-      }
-      by_query[q][t] = file;
-    }
-    for (const auto& [q, targets] : by_query) {
-      std::vector<std::vector<float>> rows(n_frames);  // (N, 4) per frame
-      std::int64_t n = -1;
-      for (const auto& [t, file] : targets) {
-        const NpyArray a = ReadNpy(file);
-        if (a.shape.size() != 2 || a.shape[1] != 4 ||
-            (n >= 0 && a.shape[0] != n)) {
-          throw Error(file.string(), "shape", std::to_string(a.shape.size()),
-                      "expected (N, 4) with the same N for every target "
-                      "frame of query frame " +
-                          frames[q].name);
-        }
-        n = a.shape[0];
-        rows[t] = a.ToFloats();
-        const cv::Mat view(static_cast<int>(n), 4, CV_32F, rows[t].data());
-        CheckFinite(view, file);
-      }
-      for (std::int64_t k = 0; k < n; ++k) {
-        add([&](int t, Eigen::Vector2f* p) {
-          if (rows[t].empty()) return false;
-          const float* r = &rows[t][k * 4];
-          *p = Eigen::Vector2f(r[0], r[1]);
-          // Shape of Motion's parse_tapir_track_info: visible where both
-          // the occlusion and the distance logits say so.
-          const float occluded = 1.0f / (1.0f + std::exp(-r[2]));
-          const float far = 1.0f / (1.0f + std::exp(-r[3]));
-          return (1.0f - occluded) * (1.0f - far) > 0.5f;
-        });
-      }
-    }
-    return prior;
   }
-  // MoSca's *_tap.npz and CoTracker's arrays: (T, N, 2) and (T, N).
-  const fs::path& file = layout.path;
+
+  const std::vector<PriorFrame>& frames_;
+  int w_, h_;
+  TrackPrior* prior_;
+};
+
+// Shape of Motion's bootstapir/<q>_<t>.npy: frame q's queries at frame t,
+// (N, 4) rows of x, y and the occlusion and distance logits.
+void ReadTapirTracks(const PriorLayout& layout,
+                     const std::vector<PriorFrame>& frames,
+                     TrackAppender* tracks) {
+  const int n_frames = static_cast<int>(frames.size());
+  const FrameKeys keys(frames);
+  std::map<int, std::map<int, fs::path>> by_query;
+  for (const fs::path& file : FilesIn(layout.path, ".npy")) {
+    const std::string stem = file.stem().string();
+    int q = -1, t = -1;
+    for (std::size_t pos = stem.find('_'); pos != std::string::npos;
+         pos = stem.find('_', pos + 1)) {
+      q = keys.Find(stem.substr(0, pos));
+      t = keys.Find(stem.substr(pos + 1));
+      if (q >= 0 && t >= 0) break;
+    }
+    if (q < 0 || t < 0) {
+      throw Error(file.string(), "frames", stem,
+                  "does not name two frames of this video as <q>_<t> (its "
+                  "frames are named like " +
+                      keys.Examples() + ")");
+    }
+    by_query[q][t] = file;
+  }
+  for (const auto& [q, targets] : by_query) {
+    std::vector<std::vector<float>> rows(n_frames);  // (N, 4) per frame
+    std::int64_t n = -1;
+    for (const auto& [t, file] : targets) {
+      const NpyArray a = ReadNpy(file);
+      if (a.shape.size() != 2 || a.shape[1] != 4 ||
+          (n >= 0 && a.shape[0] != n)) {
+        throw Error(file.string(), "shape", std::to_string(a.shape.size()),
+                    "expected (N, 4) with the same N for every target "
+                    "frame of query frame " +
+                        frames[q].name);
+      }
+      n = a.shape[0];
+      rows[t] = a.ToFloats();
+      const cv::Mat view(static_cast<int>(n), 4, CV_32F, rows[t].data());
+      CheckFinite(view, file);
+    }
+    for (std::int64_t k = 0; k < n; ++k) {
+      tracks->Add([&](int t, Eigen::Vector2f* p) {
+        if (rows[t].empty()) return false;
+        const float* r = &rows[t][k * 4];
+        *p = Eigen::Vector2f(r[0], r[1]);
+        // Shape of Motion's parse_tapir_track_info: visible where both
+        // the occlusion and the distance logits say so.
+        const float occluded = 1.0f / (1.0f + std::exp(-r[2]));
+        const float far = 1.0f / (1.0f + std::exp(-r[3]));
+        return (1.0f - occluded) * (1.0f - far) > 0.5f;
+      });
+    }
+  }
+}
+
+// MoSca's *_tap.npz and CoTracker's arrays: (T, N, 2) and (T, N).
+void ReadTrackArrays(const fs::path& file, int n_frames,
+                     TrackAppender* appender) {
   const NpzArrays arrays = ReadNpz(file);
   const bool cotracker = !arrays.count("tracks");
   const NpyArray& tracks =
@@ -664,12 +677,30 @@ std::optional<TrackPrior> ReadTrackPrior(const PriorsFolder& folder,
   CheckFinite(check, file);
   const std::int64_t n = ts[1];
   for (std::int64_t k = 0; k < n; ++k) {
-    add([&](int t, Eigen::Vector2f* p) {
+    appender->Add([&](int t, Eigen::Vector2f* p) {
       const std::size_t i = static_cast<std::size_t>(t * n + k);
       *p = Eigen::Vector2f(xy[i * stride], xy[i * stride + 1]);
       return vis[i] > 0.5f;
     });
   }
+}
+
+}  // namespace
+
+std::optional<TrackPrior> ReadTrackPrior(const PriorsFolder& folder,
+                                         const std::vector<PriorFrame>& frames,
+                                         int source_width, int source_height) {
+  const std::vector<const PriorLayout*> layouts = folder.Of(PriorKind::kTracks);
+  if (layouts.empty()) return std::nullopt;
+  const PriorLayout& layout = *layouts.front();
+  TrackPrior prior;
+  prior.layout = &layout;
+  prior.num_frames = static_cast<int>(frames.size());
+  TrackAppender appender(frames, source_width, source_height, &prior);
+  if (layout.name.starts_with("Shape of Motion"))
+    ReadTapirTracks(layout, frames, &appender);
+  else
+    ReadTrackArrays(layout.path, prior.num_frames, &appender);
   return prior;
 }
 

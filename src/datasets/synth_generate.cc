@@ -114,6 +114,86 @@ Json SynthSummary::ToJson() const {
   return j;
 }
 
+namespace {
+
+// DyCheck's scene.json values for the synthetic room (its near and far are
+// set from the training depth).
+DyCheckScene DyCheckSceneOf(const Scene& scene) {
+  DyCheckScene dycheck;
+  dycheck.fps = kFps;
+  dycheck.center = scene.target;
+  dycheck.scale = 1.0 / ((scene.room_max - scene.room_min).norm());
+  dycheck.lookat = Eigen::Vector3d::Zero();  // the target, in normalised units
+  dycheck.up = Eigen::Vector3d::UnitZ();
+  dycheck.bbox_min = (scene.room_min - scene.target) * dycheck.scale;
+  dycheck.bbox_max = (scene.room_max - scene.target) * dycheck.scale;
+  return dycheck;
+}
+
+// The training video (camera 0): its frames and depth, which the
+// validation frames' covisibility is counted against.
+std::vector<TrainingView> WriteTrainingFrames(
+    const Scene& scene, const std::vector<PosedCamera>& cameras,
+    const fs::path& out, DyCheckScene* dycheck, SynthSummary* summary,
+    ProgressBar* progress) {
+  const int train_frames = static_cast<int>(cameras.size());
+  std::vector<TrainingView> views;
+  double near = std::numeric_limits<double>::infinity(), far = 0;
+  for (int t = 0; t < train_frames; ++t) {
+    const double s = TimeOf(t, train_frames);
+    TrainingView view{cameras[t], PosesAt(scene, s), {}};
+    WriteFrame(scene, cameras[t], s, DyCheckFrameId(0, t), out, false,
+               &view.depth, &summary->render_seconds, &summary->write_seconds);
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(view.depth, &lo, &hi, nullptr, nullptr, view.depth > 0);
+    near = std::min(near, lo);
+    far = std::max(far, hi);
+    views.push_back(std::move(view));
+    dycheck->train.push_back({0, t, cameras[t]});
+    progress->Add();
+  }
+  dycheck->near = 0.9 * near;
+  dycheck->far = 1.1 * far;
+  return views;
+}
+
+// The validation cameras 1 and 2 over the training video's clock, each
+// frame with its covisible mask; the unseen share in `summary`.
+void WriteValidationFrames(const Scene& scene, const Camera& intrinsics,
+                           int val_frames,
+                           const std::vector<TrainingView>& views,
+                           const fs::path& out, DyCheckScene* dycheck,
+                           SynthSummary* summary, ProgressBar* progress) {
+  const int train_frames = static_cast<int>(views.size());
+  for (int camera_id : {1, 2}) {
+    const PosedCamera camera = ValidationCamera(scene, intrinsics, camera_id);
+    for (int t = 0; t < val_frames; ++t) {
+      const double s = TimeOf(t, train_frames);  // the training video's clock
+      const std::string id = DyCheckFrameId(camera_id, t);
+      const RenderedFrame half =
+          WriteFrame(scene, camera, s, id, out, true, nullptr,
+                     &summary->render_seconds, &summary->write_seconds);
+      Timer covisibility_timer;
+      const cv::Mat counts =
+          CovisibleCounts(half, views, summary->covisibility_threshold + 1);
+      const cv::Mat mask = CovisibleMask(counts, train_frames);
+      const cv::Mat surface = half.depth > 0;
+      summary->val_pixels += cv::countNonZero(surface);
+      summary->unseen_pixels += cv::countNonZero(surface & ~mask);
+      summary->covisibility_seconds += covisibility_timer.WallSeconds();
+      WriteMask(out / "covisible" / "2x" / "val" / (id + ".png"), mask);
+      dycheck->val.push_back({camera_id, t, camera});
+      progress->Add();
+    }
+  }
+  summary->unseen_fraction =
+      summary->val_pixels > 0
+          ? static_cast<double>(summary->unseen_pixels) / summary->val_pixels
+          : 0;
+}
+
+}  // namespace
+
 SynthSummary GenerateSynthScene(const SynthOptions& options,
                                 const fs::path& out) {
   const Preset& preset = GetPreset(options.preset);
@@ -143,72 +223,24 @@ SynthSummary GenerateSynthScene(const SynthOptions& options,
                           preset.height,
                           {f, f, preset.width / 2.0, preset.height / 2.0}};
   const int train_frames = preset.train_frames;
-
-  DyCheckScene dycheck;
-  dycheck.fps = kFps;
-  dycheck.center = scene.target;
-  dycheck.scale = 1.0 / ((scene.room_max - scene.room_min).norm());
-  dycheck.lookat = Eigen::Vector3d::Zero();  // the target, in normalised units
-  dycheck.up = Eigen::Vector3d::UnitZ();
-  dycheck.bbox_min = (scene.room_min - scene.target) * dycheck.scale;
-  dycheck.bbox_max = (scene.room_max - scene.target) * dycheck.scale;
-
+  DyCheckScene dycheck = DyCheckSceneOf(scene);
   ProgressBar progress("synth " + preset.name,
                        train_frames + 2 * preset.val_frames);
   const std::vector<PosedCamera> train_cameras = TrainingTrajectory(
       scene, intrinsics, train_frames, options.seed, options.trajectory);
-  std::vector<TrainingView> views;
-  double near = std::numeric_limits<double>::infinity(), far = 0;
-  for (int t = 0; t < train_frames; ++t) {
-    const double s = TimeOf(t, train_frames);
-    TrainingView view{train_cameras[t], PosesAt(scene, s), {}};
-    WriteFrame(scene, train_cameras[t], s, DyCheckFrameId(0, t), out, false,
-               &view.depth, &summary.render_seconds, &summary.write_seconds);
-    double lo = 0, hi = 0;
-    cv::minMaxLoc(view.depth, &lo, &hi, nullptr, nullptr, view.depth > 0);
-    near = std::min(near, lo);
-    far = std::max(far, hi);
-    views.push_back(std::move(view));
-    dycheck.train.push_back({0, t, train_cameras[t]});
-    progress.Add();
-  }
-  dycheck.near = 0.9 * near;
-  dycheck.far = 1.1 * far;
+  const std::vector<TrainingView> views = WriteTrainingFrames(
+      scene, train_cameras, out, &dycheck, &summary, &progress);
   summary.covisibility_threshold = CovisibilityThreshold(train_frames);
-
-  for (int camera_id : {1, 2}) {
-    const PosedCamera camera = ValidationCamera(scene, intrinsics, camera_id);
-    for (int t = 0; t < preset.val_frames; ++t) {
-      const double s = TimeOf(t, train_frames);  // the training video's clock
-      const std::string id = DyCheckFrameId(camera_id, t);
-      const RenderedFrame half =
-          WriteFrame(scene, camera, s, id, out, true, nullptr,
-                     &summary.render_seconds, &summary.write_seconds);
-      Timer covisibility_timer;
-      const cv::Mat counts =
-          CovisibleCounts(half, views, summary.covisibility_threshold + 1);
-      const cv::Mat mask = CovisibleMask(counts, train_frames);
-      const cv::Mat surface = half.depth > 0;
-      summary.val_pixels += cv::countNonZero(surface);
-      summary.unseen_pixels += cv::countNonZero(surface & ~mask);
-      summary.covisibility_seconds += covisibility_timer.WallSeconds();
-      WriteMask(out / "covisible" / "2x" / "val" / (id + ".png"), mask);
-      dycheck.val.push_back({camera_id, t, camera});
-      progress.Add();
-    }
-  }
+  WriteValidationFrames(scene, intrinsics, preset.val_frames, views, out,
+                        &dycheck, &summary, &progress);
   progress.Finish();
-  summary.unseen_fraction =
-      summary.val_pixels > 0
-          ? static_cast<double>(summary.unseen_pixels) / summary.val_pixels
-          : 0;
 
   if (options.priors) {
     Timer priors_timer;
     std::vector<PriorFrameSource> sources;
     for (int t = 0; t < train_frames; ++t)
-      sources.push_back({train_cameras[t], TimeOf(t, train_frames),
-                         DyCheckFrameId(0, t)});
+      sources.push_back(
+          {train_cameras[t], TimeOf(t, train_frames), DyCheckFrameId(0, t)});
     WriteSynthPriors(scene, sources, options.seed, PriorErrorModel(), out);
     summary.write_seconds += priors_timer.WallSeconds();
   }

@@ -213,98 +213,125 @@ Eigen::Vector3d ValidationEye(const Scene& scene, int index) {
                          l.validation_height[index - 1]);
 }
 
-Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale,
-                 const Layout& layout) {
-  const double k = dynamic_scale * layout.dynamic_scale;
-  const double texture = layout.texture_frequency_scale;
-  std::mt19937 rng(seed * 2654435761U + 12345U);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto jitter = [&](double amount) {
-    return amount * (2 * unit(rng) - 1);
-  };
+namespace {
 
-  Scene scene;
-  scene.layout = layout;
-  scene.room_min = Eigen::Vector3d(-4, -3, 0);
-  scene.room_max = Eigen::Vector3d(4, 3, 3);
-  scene.target = Eigen::Vector3d(0.1, 0.8, 0.6);
-  scene.light_directions = {Eigen::Vector3d(0.4, -0.3, 0.85).normalized(),
-                            Eigen::Vector3d(-0.5, 0.6, 0.4).normalized()};
-  scene.light_intensities = {0.75, 0.35};
-  scene.ambient = 0.3;
+// BuildScene's parts, added in a fixed order from one generator: the same
+// seed gives the same scene.
+class SceneBuilder {
+ public:
+  SceneBuilder(std::uint32_t seed, const Layout& layout)
+      : rng_(seed * 2654435761U + 12345U),
+        texture_(layout.texture_frequency_scale) {
+    scene_.layout = layout;
+    scene_.room_min = Eigen::Vector3d(-4, -3, 0);
+    scene_.room_max = Eigen::Vector3d(4, 3, 3);
+    scene_.target = Eigen::Vector3d(0.1, 0.8, 0.6);
+    scene_.light_directions = {Eigen::Vector3d(0.4, -0.3, 0.85).normalized(),
+                               Eigen::Vector3d(-0.5, 0.6, 0.4).normalized()};
+    scene_.light_intensities = {0.75, 0.35};
+    scene_.ambient = 0.3;
+  }
 
-  // Room: floor, four walls, ceiling, each its own material.
+  void AddRoom();
+  void AddFurniture();
+  void AddRigidMovers(double k);
+  void AddTube(double k);
+  void AddNearObject();
+  Scene Finish(bool is_static);
+
+ private:
+  double Jitter(double amount) { return amount * (2 * unit_(rng_) - 1); }
+  // Returns the new part's index (a reference would dangle on the next add).
+  std::size_t Add(ShapeKind shape, const Eigen::Vector3d& half,
+                  const Eigen::Vector3d& at, double yaw,
+                  const Eigen::Vector3d& hue, int pattern);
+
+  Scene scene_;
+  std::mt19937 rng_;
+  std::uniform_real_distribution<double> unit_{0.0, 1.0};
+  double texture_;
+  int next_instance_ = 2;
+};
+
+std::size_t SceneBuilder::Add(ShapeKind shape, const Eigen::Vector3d& half,
+                              const Eigen::Vector3d& at, double yaw,
+                              const Eigen::Vector3d& hue, int pattern) {
+  Part part;
+  part.shape = shape;
+  part.half_size = half;
+  part.rest = Rigid3d(Yaw(yaw), at);
+  part.instance = next_instance_++;
+  part.material = static_cast<int>(scene_.materials.size());
+  scene_.materials.push_back(
+      RandomMaterial(rng_, hue, pattern, 4.0 * texture_));
+  scene_.parts.push_back(part);
+  return scene_.parts.size() - 1;
+}
+
+// Floor, four walls, ceiling, each its own material.
+void SceneBuilder::AddRoom() {
   const std::vector<std::pair<Eigen::Vector3d, int>> room_looks = {
       {{0.75, 0.45, 0.35}, 2}, {{0.35, 0.55, 0.75}, 0}, {{0.8, 0.75, 0.5}, 1},
       {{0.45, 0.7, 0.45}, 0},  {{0.6, 0.45, 0.3}, 1},   {{0.85, 0.85, 0.8}, 0}};
   Part room;
   room.shape = ShapeKind::kRoom;
-  room.half_size = (scene.room_max - scene.room_min) / 2;
+  room.half_size = (scene_.room_max - scene_.room_min) / 2;
   room.rest = Rigid3d(Eigen::Quaterniond::Identity(),
-                      (scene.room_max + scene.room_min) / 2);
+                      (scene_.room_max + scene_.room_min) / 2);
   room.instance = 1;
-  room.material = static_cast<int>(scene.materials.size());
+  room.material = static_cast<int>(scene_.materials.size());
   for (const auto& [hue, pattern] : room_looks) {
-    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 1.5 * texture));
+    scene_.materials.push_back(
+        RandomMaterial(rng_, hue, pattern, 1.5 * texture_));
   }
-  scene.parts.push_back(room);
+  scene_.parts.push_back(room);
+}
 
-  int next_instance = 2;
-  // Returns the new part's index (a reference would dangle on the next add).
-  const auto add = [&](ShapeKind shape, const Eigen::Vector3d& half,
-                       const Eigen::Vector3d& at, double yaw,
-                       const Eigen::Vector3d& hue, int pattern) {
-    Part part;
-    part.shape = shape;
-    part.half_size = half;
-    part.rest = Rigid3d(Yaw(yaw), at);
-    part.instance = next_instance++;
-    part.material = static_cast<int>(scene.materials.size());
-    scene.materials.push_back(RandomMaterial(rng, hue, pattern, 4.0 * texture));
-    scene.parts.push_back(part);
-    return scene.parts.size() - 1;
-  };
-
-  // Static furniture.
-  add(ShapeKind::kBox, {0.55, 0.35, 0.37},
-      {-1.5 + jitter(0.15), 1.4 + jitter(0.15), 0.37}, 0.3 + jitter(0.2),
+void SceneBuilder::AddFurniture() {
+  Add(ShapeKind::kBox, {0.55, 0.35, 0.37},
+      {-1.5 + Jitter(0.15), 1.4 + Jitter(0.15), 0.37}, 0.3 + Jitter(0.2),
       {0.55, 0.35, 0.2}, 1);
-  add(ShapeKind::kBox, {0.25, 0.25, 0.25},
-      {1.4 + jitter(0.15), 1.6 + jitter(0.15), 0.25}, jitter(0.5),
+  Add(ShapeKind::kBox, {0.25, 0.25, 0.25},
+      {1.4 + Jitter(0.15), 1.6 + Jitter(0.15), 0.25}, Jitter(0.5),
       {0.8, 0.6, 0.3}, 2);
-  add(ShapeKind::kSphere, {0.3, 0.3, 0.3},
-      {-0.4 + jitter(0.1), 2.1 + jitter(0.1), 0.3}, 0, {0.3, 0.6, 0.8}, 0);
-  add(ShapeKind::kBox, {0.15, 0.15, 0.9},
-      {0.6 + jitter(0.1), 2.4 + jitter(0.1), 0.9}, jitter(0.3),
+  Add(ShapeKind::kSphere, {0.3, 0.3, 0.3},
+      {-0.4 + Jitter(0.1), 2.1 + Jitter(0.1), 0.3}, 0, {0.3, 0.6, 0.8}, 0);
+  Add(ShapeKind::kBox, {0.15, 0.15, 0.9},
+      {0.6 + Jitter(0.1), 2.4 + Jitter(0.1), 0.9}, Jitter(0.3),
       {0.7, 0.7, 0.72}, 1);
+}
 
-  // Rigidly moving: a box sliding and turning, a ball bouncing and rolling.
+// A box sliding and turning, a ball bouncing and rolling; `k` scales them.
+void SceneBuilder::AddRigidMovers(double k) {
   Part& slider =
-      scene.parts[add(ShapeKind::kBox, Eigen::Vector3d::Constant(0.2 * k),
-                      {-0.9, 0.3, 0.2 * k}, 0.0, {0.85, 0.3, 0.3}, 2)];
+      scene_.parts[Add(ShapeKind::kBox, Eigen::Vector3d::Constant(0.2 * k),
+                       {-0.9, 0.3, 0.2 * k}, 0.0, {0.85, 0.3, 0.3}, 2)];
   slider.motion = MotionKind::kSlide;
-  slider.from = Eigen::Vector3d(-0.9 + jitter(0.1), 0.3 + jitter(0.1), 0.2 * k);
-  slider.to = Eigen::Vector3d(0.4 + jitter(0.1), 0.0 + jitter(0.1), 0.2 * k);
+  slider.from = Eigen::Vector3d(-0.9 + Jitter(0.1), 0.3 + Jitter(0.1), 0.2 * k);
+  slider.to = Eigen::Vector3d(0.4 + Jitter(0.1), 0.0 + Jitter(0.1), 0.2 * k);
   slider.amplitude = M_PI / 2;
   Part& ball =
-      scene.parts[add(ShapeKind::kSphere, Eigen::Vector3d::Constant(0.18 * k),
-                      {0.9, 1.0, 0.18 * k}, 0, {0.9, 0.8, 0.2}, 0)];
+      scene_.parts[Add(ShapeKind::kSphere, Eigen::Vector3d::Constant(0.18 * k),
+                       {0.9, 1.0, 0.18 * k}, 0, {0.9, 0.8, 0.2}, 0)];
   ball.motion = MotionKind::kBounce;
-  ball.from = Eigen::Vector3d(1.0 + jitter(0.1), 1.0 + jitter(0.1), 0.18 * k);
-  ball.to = Eigen::Vector3d(0.1 + jitter(0.1), 0.6 + jitter(0.1), 0.18 * k);
+  ball.from = Eigen::Vector3d(1.0 + Jitter(0.1), 1.0 + Jitter(0.1), 0.18 * k);
+  ball.to = Eigen::Vector3d(0.1 + Jitter(0.1), 0.6 + Jitter(0.1), 0.18 * k);
   ball.amplitude = 0.5;
   ball.frequency = 2.0;
+}
 
-  // Non-rigid: a tube bending back and forth, a chain of overlapping spheres
-  // along an arc whose curvature changes; the texture is painted in the
-  // straight pose (offset by arc length) and deforms with the bend.
+// Non-rigid: a tube bending back and forth, a chain of overlapping spheres
+// along an arc whose curvature changes; the texture is painted in the
+// straight pose (offset by arc length) and deforms with the bend.
+void SceneBuilder::AddTube(double k) {
   constexpr int kTubeSpheres = 16;
   const double length = 1.3 * k, base_radius = 0.11 * k;
-  const Eigen::Vector3d base(1.3 + jitter(0.1), 0.2 + jitter(0.1), 0.0);
-  const double tube_yaw = 0.6 + jitter(0.2);
-  const int tube_instance = next_instance++;
-  const int tube_material = static_cast<int>(scene.materials.size());
-  scene.materials.push_back(RandomMaterial(rng, {0.35, 0.75, 0.35}, 1, 5.0 * texture));
+  const Eigen::Vector3d base(1.3 + Jitter(0.1), 0.2 + Jitter(0.1), 0.0);
+  const double tube_yaw = 0.6 + Jitter(0.2);
+  const int tube_instance = next_instance_++;
+  const int tube_material = static_cast<int>(scene_.materials.size());
+  scene_.materials.push_back(
+      RandomMaterial(rng_, {0.35, 0.75, 0.35}, 1, 5.0 * texture_));
   for (int i = 0; i < kTubeSpheres; ++i) {
     Part part;
     part.shape = ShapeKind::kSphere;
@@ -321,36 +348,55 @@ Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale,
     part.amplitude = 0.9;
     part.frequency = 1.0;
     part.phase = 0.4;
-    scene.parts.push_back(part);
+    scene_.parts.push_back(part);
   }
+}
 
-  // Close to a validation camera: what a view far from the training arc
-  // sees large in front of everything else. Standing on the floor, its
-  // top at the camera's height at most, so that it fills the lower part
-  // of the view rather than all of it.
-  if (layout.near_object_camera != 0) {
-    const Eigen::Vector3d eye = ValidationEye(scene, layout.near_object_camera);
-    Eigen::Vector3d at =
-        eye + (scene.target - eye).normalized() * layout.near_object_distance;
-    const double size = layout.near_object_size;
-    const double height =
-        layout.near_object_is_sphere ? size : std::max(size, 0.5 * at.z());
-    at.z() = height;
-    add(layout.near_object_is_sphere ? ShapeKind::kSphere : ShapeKind::kBox,
-        layout.near_object_is_sphere ? Eigen::Vector3d::Constant(size)
-                                     : Eigen::Vector3d(size, size, height),
-        at, jitter(0.5), {0.5 + jitter(0.3), 0.4 + jitter(0.3), 0.6}, 2);
-  }
+// Close to a validation camera: what a view far from the training arc sees
+// large in front of everything else. Standing on the floor, its top at the
+// camera's height at most, so that it fills the lower part of the view
+// rather than all of it.
+void SceneBuilder::AddNearObject() {
+  const Layout& layout = scene_.layout;
+  if (layout.near_object_camera == 0) return;
+  const Eigen::Vector3d eye = ValidationEye(scene_, layout.near_object_camera);
+  Eigen::Vector3d at =
+      eye + (scene_.target - eye).normalized() * layout.near_object_distance;
+  const double size = layout.near_object_size;
+  const double height =
+      layout.near_object_is_sphere ? size : std::max(size, 0.5 * at.z());
+  at.z() = height;
+  Add(layout.near_object_is_sphere ? ShapeKind::kSphere : ShapeKind::kBox,
+      layout.near_object_is_sphere ? Eigen::Vector3d::Constant(size)
+                                   : Eigen::Vector3d(size, size, height),
+      at, Jitter(0.5), {0.5 + Jitter(0.3), 0.4 + Jitter(0.3), 0.6}, 2);
+}
 
-  for (Part& part : scene.parts) {
+// A static scene's movers frozen where they are a third of the way through
+// the clip.
+Scene SceneBuilder::Finish(bool is_static) {
+  for (Part& part : scene_.parts) {
     part.dynamic = !is_static && part.motion != MotionKind::kStatic;
     if (is_static && part.motion != MotionKind::kStatic) {
-      // Frozen where it is a third of the way through the clip.
       part.rest = Pose(part, 1.0 / 3.0);
       part.motion = MotionKind::kStatic;
     }
   }
-  return scene;
+  return std::move(scene_);
+}
+
+}  // namespace
+
+Scene BuildScene(std::uint32_t seed, bool is_static, double dynamic_scale,
+                 const Layout& layout) {
+  const double k = dynamic_scale * layout.dynamic_scale;
+  SceneBuilder builder(seed, layout);
+  builder.AddRoom();
+  builder.AddFurniture();
+  builder.AddRigidMovers(k);
+  builder.AddTube(k);
+  builder.AddNearObject();
+  return builder.Finish(is_static);
 }
 
 PartPoses PosesAt(const Scene& scene, double s) {

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -89,19 +90,10 @@ std::vector<cv::Point2f> ToCv(const std::vector<Eigen::Vector2d>& points) {
   return out;
 }
 
-}  // namespace
-
-int RotationOnlyEstimate::Posed() const {
-  return static_cast<int>(
-      std::count_if(cam_from_world.begin(), cam_from_world.end(),
-                    [](const auto& r) { return r.has_value(); }));
-}
-
-RotationOnlyEstimate EstimateRotationOnly(
-    int frames, int width, int height, const std::vector<FrameMatches>& given,
-    const RotationOnlyOptions& options) {
-  const double cx = width / 2.0, cy = height / 2.0;
-  // 1. A homography per pair, by RANSAC.
+// A homography per pair with at least min_inliers RANSAC inliers.
+std::vector<Pair> PairHomographies(int frames,
+                                   const std::vector<FrameMatches>& given,
+                                   const RotationOnlyOptions& options) {
   std::vector<Pair> pairs;
   for (const FrameMatches& m : given) {
     if (m.xi.size() != m.xj.size()) {
@@ -131,43 +123,50 @@ RotationOnlyEstimate EstimateRotationOnly(
                                  "homography explains",
                                  options.min_inliers));
   }
+  return pairs;
+}
 
-  // A still camera: every homography moves the image corners by less than
-  // kStillPixels. Its focal length is unobservable; COLMAP's prior for an
-  // unknown focal length stands in.
+// A still camera: every homography moves the image corners by less than
+// kStillPixels. Its focal length is unobservable; COLMAP's prior for an
+// unknown focal length stands in. nullopt when the camera turns.
+std::optional<RotationOnlyEstimate> StillCamera(const std::vector<Pair>& pairs,
+                                                int frames, int width,
+                                                int height) {
   constexpr double kStillPixels = 1.0, kPriorFocalPerSide = 1.2;
   double largest_move = 0;
   for (const Pair& p : pairs) {
-    for (const Eigen::Vector2d corner :
+    for (const Eigen::Vector2d& corner :
          {Eigen::Vector2d(0, 0), Eigen::Vector2d(width, 0),
           Eigen::Vector2d(0, height), Eigen::Vector2d(width, height)}) {
       const Eigen::Vector2d moved = (p.h * corner.homogeneous()).hnormalized();
       largest_move = std::max(largest_move, (moved - corner).norm());
     }
   }
-  if (largest_move < kStillPixels) {
-    RotationOnlyEstimate still;
-    still.width = width;
-    still.height = height;
-    still.focal = kPriorFocalPerSide * std::max(width, height);
-    still.cam_from_world.assign(frames, std::nullopt);
-    double sum = 0;
-    std::int64_t count = 0;
-    for (const Pair& p : pairs) {
-      still.cam_from_world[p.matches->i] = Eigen::Matrix3d::Identity();
-      still.cam_from_world[p.matches->j] = Eigen::Matrix3d::Identity();
-      ++still.pairs;
-      for (const int idx : p.inliers) {
-        sum += (p.matches->xi[idx] - p.matches->xj[idx]).squaredNorm();
-        ++count;
-      }
+  if (largest_move >= kStillPixels) return std::nullopt;
+  RotationOnlyEstimate still;
+  still.width = width;
+  still.height = height;
+  still.focal = kPriorFocalPerSide * std::max(width, height);
+  still.cam_from_world.assign(frames, std::nullopt);
+  double sum = 0;
+  std::int64_t count = 0;
+  for (const Pair& p : pairs) {
+    still.cam_from_world[p.matches->i] = Eigen::Matrix3d::Identity();
+    still.cam_from_world[p.matches->j] = Eigen::Matrix3d::Identity();
+    ++still.pairs;
+    for (const int idx : p.inliers) {
+      sum += (p.matches->xi[idx] - p.matches->xj[idx]).squaredNorm();
+      ++count;
     }
-    still.rms_pixels = count > 0 ? std::sqrt(sum / count) : 0.0;
-    return still;
   }
+  still.rms_pixels = count > 0 ? std::sqrt(sum / count) : 0.0;
+  return still;
+}
 
-  // 2. The focal length whose K makes the homographies most like
-  // rotations: a log-spaced search, then a golden-section refinement.
+// The focal length whose K makes the homographies most like rotations: a
+// log-spaced search, then a golden-section refinement.
+double SearchFocal(const std::vector<Pair>& pairs, int width, int height) {
+  const double cx = width / 2.0, cy = height / 2.0;
   const double side = std::max(width, height);
   const double lo = std::log(kMinFocalPerSide * side);
   const double hi = std::log(kMaxFocalPerSide * side);
@@ -197,27 +196,28 @@ RotationOnlyEstimate EstimateRotationOnly(
     else
       a = c;
   }
-  double focal = std::exp((a + b) / 2);
+  return std::exp((a + b) / 2);
+}
 
-  // 3. Rotations along a spanning tree of the strongest pairs, from the
-  // first frame any pair holds: R_j R_i^T = K^-1 H_ij K.
-  RotationOnlyEstimate out;
-  out.width = width;
-  out.height = height;
-  out.cam_from_world.assign(frames, std::nullopt);
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+// Rotations along a spanning tree of the strongest pairs (sorted so), from
+// the first frame any pair holds, whose index is returned: R_j R_i^T =
+// K^-1 H_ij K.
+int ChainRotations(std::vector<Pair>* pairs, double focal, double cx, double cy,
+                   RotationOnlyEstimate* out) {
+  std::sort(pairs->begin(), pairs->end(), [](const Pair& x, const Pair& y) {
     return x.inliers.size() > y.inliers.size();
   });
+  const int frames = static_cast<int>(out->cam_from_world.size());
   int reference = frames;
-  for (const Pair& p : pairs)
+  for (const Pair& p : *pairs)
     reference = std::min({reference, p.matches->i, p.matches->j});
-  out.cam_from_world[reference] = Eigen::Matrix3d::Identity();
+  out->cam_from_world[reference] = Eigen::Matrix3d::Identity();
   const Eigen::Matrix3d k = Intrinsics(focal, cx, cy);
   for (bool grew = true; grew;) {
     grew = false;
-    for (const Pair& p : pairs) {
-      auto& ri = out.cam_from_world[p.matches->i];
-      auto& rj = out.cam_from_world[p.matches->j];
+    for (const Pair& p : *pairs) {
+      auto& ri = out->cam_from_world[p.matches->i];
+      auto& rj = out->cam_from_world[p.matches->j];
       if (ri.has_value() == rj.has_value()) continue;
       const Eigen::Matrix3d rij = NearestRotation(k.inverse() * p.h * k);
       if (ri)
@@ -228,20 +228,27 @@ RotationOnlyEstimate EstimateRotationOnly(
       break;  // the strongest pair first, again
     }
   }
+  return reference;
+}
 
-  // 4. Bundle adjustment of the rotations and the focal length.
+// Bundle adjustment of the rotations and the focal length (the reference
+// frame's rotation held), on up to max_matches_per_pair inliers a pair.
+void AdjustRotations(const std::vector<Pair>& pairs, int reference, double cx,
+                     double cy, const RotationOnlyOptions& options,
+                     RotationOnlyEstimate* out, double* focal) {
+  const int frames = static_cast<int>(out->cam_from_world.size());
   std::vector<std::array<double, 3>> angle_axis(frames);
   for (int f = 0; f < frames; ++f) {
-    if (!out.cam_from_world[f]) continue;
-    const Eigen::Matrix3d& r = *out.cam_from_world[f];
+    if (!out->cam_from_world[f]) continue;
+    const Eigen::Matrix3d& r = *out->cam_from_world[f];
     ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(r.data()),
                                      angle_axis[f].data());
   }
   ceres::Problem problem;
   for (const Pair& p : pairs) {
     const FrameMatches& m = *p.matches;
-    if (!out.cam_from_world[m.i] || !out.cam_from_world[m.j]) continue;
-    ++out.pairs;
+    if (!out->cam_from_world[m.i] || !out->cam_from_world[m.j]) continue;
+    ++out->pairs;
     const int n = static_cast<int>(p.inliers.size());
     const int keep = std::min(n, options.max_matches_per_pair);
     for (int s = 0; s < keep; ++s) {
@@ -249,7 +256,7 @@ RotationOnlyEstimate EstimateRotationOnly(
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<TransferResidual, 2, 1, 3, 3>(
               new TransferResidual{m.xi[idx], m.xj[idx], cx, cy}),
-          new ceres::HuberLoss(kHuberPixels), &focal, angle_axis[m.i].data(),
+          new ceres::HuberLoss(kHuberPixels), focal, angle_axis[m.i].data(),
           angle_axis[m.j].data());
     }
   }
@@ -260,23 +267,25 @@ RotationOnlyEstimate EstimateRotationOnly(
   solver.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
-  if (!summary.IsSolutionUsable() || !std::isfinite(focal) || focal <= 0) {
+  if (!summary.IsSolutionUsable() || !std::isfinite(*focal) || *focal <= 0) {
     throw Error("rotation-only model", "bundle adjustment", "",
                 summary.BriefReport());
   }
   for (int f = 0; f < frames; ++f) {
-    if (!out.cam_from_world[f]) continue;
+    if (!out->cam_from_world[f]) continue;
     Eigen::Matrix3d r;
     ceres::AngleAxisToRotationMatrix(angle_axis[f].data(),
                                      ceres::ColumnMajorAdapter3x3(r.data()));
-    out.cam_from_world[f] = r;
+    out->cam_from_world[f] = r;
   }
-  out.focal = focal;
+}
 
-  // 5. The transfer error over every inlier.
+// The transfer error over every inlier of the posed pairs (pixels, RMS).
+double TransferRms(const std::vector<Pair>& pairs,
+                   const RotationOnlyEstimate& out, double cx, double cy) {
   double sum = 0;
   std::int64_t count = 0;
-  const Eigen::Matrix3d kf = Intrinsics(focal, cx, cy);
+  const Eigen::Matrix3d kf = Intrinsics(out.focal, cx, cy);
   for (const Pair& p : pairs) {
     const FrameMatches& m = *p.matches;
     if (!out.cam_from_world[m.i] || !out.cam_from_world[m.j]) continue;
@@ -289,7 +298,34 @@ RotationOnlyEstimate EstimateRotationOnly(
       ++count;
     }
   }
-  out.rms_pixels = count > 0 ? std::sqrt(sum / count) : 0.0;
+  return count > 0 ? std::sqrt(sum / count) : 0.0;
+}
+
+}  // namespace
+
+int RotationOnlyEstimate::Posed() const {
+  return static_cast<int>(
+      std::count_if(cam_from_world.begin(), cam_from_world.end(),
+                    [](const auto& r) { return r.has_value(); }));
+}
+
+RotationOnlyEstimate EstimateRotationOnly(
+    int frames, int width, int height, const std::vector<FrameMatches>& given,
+    const RotationOnlyOptions& options) {
+  const double cx = width / 2.0, cy = height / 2.0;
+  std::vector<Pair> pairs = PairHomographies(frames, given, options);
+  if (std::optional<RotationOnlyEstimate> still =
+          StillCamera(pairs, frames, width, height))
+    return *still;
+  double focal = SearchFocal(pairs, width, height);
+  RotationOnlyEstimate out;
+  out.width = width;
+  out.height = height;
+  out.cam_from_world.assign(frames, std::nullopt);
+  const int reference = ChainRotations(&pairs, focal, cx, cy, &out);
+  AdjustRotations(pairs, reference, cx, cy, options, &out, &focal);
+  out.focal = focal;
+  out.rms_pixels = TransferRms(pairs, out, cx, cy);
   return out;
 }
 

@@ -45,17 +45,20 @@ int Adam::AddGroup(std::string name, std::vector<float>* params, int width,
   return static_cast<int>(groups_.size()) - 1;
 }
 
-void Adam::RestoreRows() {
-  if (groups_.empty()) return;
+std::string Adam::RestoreRows() {
+  if (groups_.empty()) return "";
   rows_ =
       static_cast<std::int64_t>(groups_[0].params->size()) / groups_[0].width;
   for (const Group& g : groups_) {
-    PANO4D_CHECK(g.v.size() == g.params->size(),
-                 "Adam group " + g.name + ": " + std::to_string(g.v.size()) +
-                     " second moments for " + std::to_string(g.params->size()) +
-                     " parameters");
+    if (static_cast<std::int64_t>(g.params->size()) != rows_ * g.width)
+      return "group " + g.name + ": " + std::to_string(g.params->size()) +
+             " parameters are not " + std::to_string(rows_) + " rows";
+    if (g.m.size() != g.params->size() || g.v.size() != g.params->size())
+      return "group " + g.name + ": " + std::to_string(g.m.size()) + " and " +
+             std::to_string(g.v.size()) + " moments for " +
+             std::to_string(g.params->size()) + " parameters";
   }
-  CheckSizes();
+  return "";
 }
 
 void Adam::SetLearningRate(int group, double lr) { groups_.at(group).lr = lr; }

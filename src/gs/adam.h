@@ -65,9 +65,11 @@ class Adam {
   }
   void set_step(std::int64_t step) { step_ = step; }
   // After a checkpoint replaced every group's parameters and moments with
-  // arrays of another row count: takes the count from them. Throws
-  // pano4d::Error when the groups disagree.
-  void RestoreRows();
+  // arrays of another row count: takes the count from them. Returns what
+  // does not fit (parameters of another row count, moments of another
+  // size), empty when everything does: the file's content, which the
+  // caller names.
+  std::string RestoreRows();
 
  private:
   struct Group {

@@ -98,6 +98,157 @@ void RingRows(double* ring, std::size_t stride, int py, int height,
   }
 }
 
+// One evaluation of the photometric loss, streamed band by band: each
+// thread takes one band of rows [r0, r1) through three passes, kRadius rows
+// apart, so that its maps stay in the cache: (1) a row's moments blurred
+// along it, into a ring of kWindow rows; (2) kRadius rows behind, those
+// blurred down the columns, SSIM and its gradient maps, blurred along the
+// row into a second ring; (3) kRadius rows further behind, the gradient
+// maps blurred down the columns and dL/dr. A band recomputes the
+// 2 kRadius rows of (1) and kRadius rows of (2) beyond its edges that it
+// reads; they are the same values whoever computes them, so the result does
+// not depend on the thread count.
+struct PhotometricPass {
+  const float* x;  // rendered
+  const float* y;  // target
+  int width, height;
+  double ssim_weight;
+  double scale;  // 1 / values
+  double d_s;    // d(ssim_weight (1 - mean S)) / dS
+  std::vector<float>* d_rendered;
+  double *ssim_rows, *l1_rows, *mse_rows;
+  std::size_t moment_stride, grad_stride, padded_width;
+
+  std::size_t ScratchSize() const {
+    return kWindow * (moment_stride + grad_stride) + padded_width * kMoments +
+           moment_stride + 2 * grad_stride;
+  }
+  void Band(int band, int bands, std::vector<double>* scratch) const;
+  void MomentRow(int t, double* padded, double* slot) const;
+  double SsimRow(const double* moments, double* grads, double* padded,
+                 double* slot) const;
+  void LossRow(int pz, const double* blurred) const;
+};
+
+// (1) Row t's moments, blurred along it. Map q * 3 + c is moment q (x, y,
+// x^2, y^2, xy) of channel c.
+void PhotometricPass::MomentRow(int t, double* padded, double* slot) const {
+  const float* xr = x + static_cast<std::size_t>(t) * width * 3;
+  const float* yr = y + static_cast<std::size_t>(t) * width * 3;
+  for (int c = 0; c < 3; ++c) {
+    double* m[5];
+    for (int q = 0; q < 5; ++q)
+      m[q] = &padded[(q * 3 + c) * padded_width + kRadius];
+    for (int px = 0; px < width; ++px) {
+      const double xv = xr[px * 3 + c], yv = yr[px * 3 + c];
+      m[0][px] = xv;
+      m[1][px] = yv;
+      m[2][px] = xv * xv;
+      m[3][px] = yv * yv;
+      m[4][px] = xv * yv;
+    }
+  }
+  BlurRow<kMoments>(padded, width, slot);
+}
+
+// (2) A row's SSIM from its blurred `moments`, and its gradient maps (map
+// c, 3 + c and 6 + c: with respect to mu_x, E[x^2] and E[xy]) blurred along
+// the row into `slot`. Returns the row's sum of SSIM.
+double PhotometricPass::SsimRow(const double* moments, double* grads,
+                                double* padded, double* slot) const {
+  double ssim = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double *mu_x = moments + c * width, *mu_y = moments + (3 + c) * width,
+                 *e_xx = moments + (6 + c) * width,
+                 *e_yy = moments + (9 + c) * width,
+                 *e_xy = moments + (12 + c) * width;
+    double *g_mu = grads + c * width, *g_xx = grads + (3 + c) * width,
+           *g_xy = grads + (6 + c) * width;
+    for (int px = 0; px < width; ++px) {
+      const double mx = mu_x[px], my = mu_y[px];
+      const double a1 = 2 * mx * my + kC1;
+      const double a2 = 2 * (e_xy[px] - mx * my) + kC2;
+      const double b1 = mx * mx + my * my + kC1;
+      const double b2 = (e_xx[px] - mx * mx) + (e_yy[px] - my * my) + kC2;
+      const double s = a1 * a2 / (b1 * b2);
+      ssim += s;
+      // S = A1 A2 / (B1 B2) as a function of mu_x, E[x^2] and E[xy].
+      g_mu[px] = d_s * (2 * my * (a2 - a1) / (b1 * b2) -
+                        2 * mx * s * (1 / b1 - 1 / b2));
+      g_xx[px] = d_s * (-s / b2);
+      g_xy[px] = d_s * (2 * a1 / (b1 * b2));
+    }
+  }
+  // The window is symmetric and zero padding makes the filter
+  // self-adjoint: the backward blurs the gradient maps the same way.
+  for (int j = 0; j < kGrads; ++j)
+    std::copy(grads + j * width, grads + (j + 1) * width,
+              padded + j * padded_width + kRadius);
+  BlurRow<kGrads>(padded, width, slot);
+  return ssim;
+}
+
+// (3) Row pz: L1, squared error and dL/dr from the `blurred` gradient maps.
+void PhotometricPass::LossRow(int pz, const double* blurred) const {
+  const std::size_t first_value = static_cast<std::size_t>(pz) * width * 3;
+  double l1 = 0, mse = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double *g_mu = blurred + c * width, *g_xx = blurred + (3 + c) * width,
+                 *g_xy = blurred + (6 + c) * width;
+    for (int px = 0; px < width; ++px) {
+      const std::size_t i = first_value + px * 3 + c;
+      const double xv = x[i], yv = y[i], diff = xv - yv;
+      l1 += std::abs(diff);
+      mse += diff * diff;
+      if (d_rendered == nullptr) continue;
+      // d|d|/dd = sign(d), 0 at 0 (a subgradient).
+      const double d_l1 = (1 - ssim_weight) * scale * ((diff > 0) - (diff < 0));
+      (*d_rendered)[i] = static_cast<float>(d_l1 + g_mu[px] +
+                                            2 * xv * g_xx[px] + yv * g_xy[px]);
+    }
+  }
+  l1_rows[pz] = l1;
+  mse_rows[pz] = mse;
+}
+
+void PhotometricPass::Band(int band, int bands,
+                           std::vector<double>* scratch) const {
+  // Every value is written before it is read but the padding of `padded`,
+  // zeros from the first call on.
+  if (scratch->size() != ScratchSize()) scratch->assign(ScratchSize(), 0.0);
+  double* moment_ring = scratch->data();
+  double* grad_ring = moment_ring + kWindow * moment_stride;
+  double* padded = grad_ring + kWindow * grad_stride;
+  double* moments = padded + padded_width * kMoments;
+  double* grads = moments + moment_stride;
+  double* blurred = grads + grad_stride;
+  const double* rows[kWindow];
+
+  const int r0 = height * band / bands, r1 = height * (band + 1) / bands;
+  const int first = std::max(0, r0 - 2 * kRadius);
+  const int last = std::min(height, r1 + 2 * kRadius);
+  const int grads_first = std::max(0, r0 - kRadius);
+  const int grads_last = std::min(height, r1 + kRadius);
+  for (int t = first; r0 < r1 && t < r1 + 2 * kRadius; ++t) {
+    if (t < last)
+      MomentRow(t, padded, moment_ring + (t % kWindow) * moment_stride);
+    const int py = t - kRadius;
+    if (py >= grads_first && py < grads_last) {
+      RingRows(moment_ring, moment_stride, py, height, rows);
+      BlurColumn(rows, moment_stride, moments);
+      const double ssim = SsimRow(moments, grads, padded,
+                                  grad_ring + (py % kWindow) * grad_stride);
+      if (py >= r0 && py < r1) ssim_rows[py] = ssim;
+    }
+    const int pz = t - 2 * kRadius;
+    if (pz >= r0 && pz < r1) {
+      RingRows(grad_ring, grad_stride, pz, height, rows);
+      BlurColumn(rows, grad_stride, blurred);
+      LossRow(pz, blurred);
+    }
+  }
+}
+
 }  // namespace
 
 PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
@@ -123,142 +274,29 @@ PhotometricLoss ComputePhotometricLoss(const std::vector<float>& rendered,
 
   PhotometricLossBuffers local;
   PhotometricLossBuffers& b = buffers != nullptr ? *buffers : local;
-  const std::size_t moment_stride = static_cast<std::size_t>(width) * kMoments;
-  const std::size_t grad_stride = static_cast<std::size_t>(width) * kGrads;
-  const std::size_t padded_width =
-      static_cast<std::size_t>(width) + 2 * kRadius;
   std::vector<double> ssim_rows(height), l1_rows(height), mse_rows(height);
   if (d_rendered != nullptr) d_rendered->resize(n);
   const double scale = 1.0 / static_cast<double>(n);
-  // d(ssim_weight (1 - mean S)) / dS.
-  const double d_s = -ssim_weight * scale;
-  const float* x = rendered.data();
-  const float* y = target.data();
-
-  // Each thread streams one band of rows [r0, r1) through three passes,
-  // kRadius rows apart, so that its maps stay in the cache: (1) a row's
-  // moments blurred along it, into a ring of kWindow rows; (2) kRadius rows
-  // behind, those blurred down the columns, SSIM and its gradient maps,
-  // blurred along the row into a second ring; (3) kRadius rows further
-  // behind, the gradient maps blurred down the columns and dL/dr. A band
-  // recomputes the 2 kRadius rows of (1) and kRadius rows of (2) beyond its
-  // edges that it reads; they are the same values whoever computes them, so
-  // the result does not depend on the thread count.
+  const PhotometricPass pass{rendered.data(),
+                             target.data(),
+                             width,
+                             height,
+                             ssim_weight,
+                             scale,
+                             -ssim_weight * scale,
+                             d_rendered,
+                             ssim_rows.data(),
+                             l1_rows.data(),
+                             mse_rows.data(),
+                             static_cast<std::size_t>(width) * kMoments,
+                             static_cast<std::size_t>(width) * kGrads,
+                             static_cast<std::size_t>(width) + 2 * kRadius};
 #pragma omp parallel
   {
     const int bands = omp_get_num_threads(), band = omp_get_thread_num();
 #pragma omp single
     b.threads.resize(bands);
-    std::vector<double>& scratch = b.threads[band];
-    // Every value is written before it is read but the padding of
-    // `padded`, zeros from the first call on.
-    const std::size_t size = kWindow * (moment_stride + grad_stride) +
-                             padded_width * kMoments + moment_stride +
-                             2 * grad_stride;
-    if (scratch.size() != size) scratch.assign(size, 0.0);
-    double* moment_ring = scratch.data();
-    double* grad_ring = moment_ring + kWindow * moment_stride;
-    double* padded = grad_ring + kWindow * grad_stride;
-    double* moments = padded + padded_width * kMoments;
-    double* grads = moments + moment_stride;
-    double* blurred = grads + grad_stride;
-    const double* rows[kWindow];
-
-    const int r0 = height * band / bands, r1 = height * (band + 1) / bands;
-    const int first = std::max(0, r0 - 2 * kRadius);
-    const int last = std::min(height, r1 + 2 * kRadius);
-    const int grads_first = std::max(0, r0 - kRadius);
-    const int grads_last = std::min(height, r1 + kRadius);
-    for (int t = first; r0 < r1 && t < r1 + 2 * kRadius; ++t) {
-      // (1) Row t's moments, blurred along it. Map q * 3 + c is moment q
-      // (x, y, x^2, y^2, xy) of channel c.
-      if (t < last) {
-        const float* xr = x + static_cast<std::size_t>(t) * width * 3;
-        const float* yr = y + static_cast<std::size_t>(t) * width * 3;
-        for (int c = 0; c < 3; ++c) {
-          double* m[5];
-          for (int q = 0; q < 5; ++q)
-            m[q] = &padded[(q * 3 + c) * padded_width + kRadius];
-          for (int px = 0; px < width; ++px) {
-            const double xv = xr[px * 3 + c], yv = yr[px * 3 + c];
-            m[0][px] = xv;
-            m[1][px] = yv;
-            m[2][px] = xv * xv;
-            m[3][px] = yv * yv;
-            m[4][px] = xv * yv;
-          }
-        }
-        BlurRow<kMoments>(padded, width,
-                          moment_ring + (t % kWindow) * moment_stride);
-      }
-      // (2) Row py: SSIM and its gradient maps per pixel (map c, 3 + c
-      // and 6 + c: with respect to mu_x, E[x^2] and E[xy]).
-      const int py = t - kRadius;
-      if (py >= grads_first && py < grads_last) {
-        RingRows(moment_ring, moment_stride, py, height, rows);
-        BlurColumn(rows, moment_stride, moments);
-        double ssim = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double *mu_x = moments + c * width,
-                       *mu_y = moments + (3 + c) * width,
-                       *e_xx = moments + (6 + c) * width,
-                       *e_yy = moments + (9 + c) * width,
-                       *e_xy = moments + (12 + c) * width;
-          double *g_mu = grads + c * width, *g_xx = grads + (3 + c) * width,
-                 *g_xy = grads + (6 + c) * width;
-          for (int px = 0; px < width; ++px) {
-            const double mx = mu_x[px], my = mu_y[px];
-            const double a1 = 2 * mx * my + kC1;
-            const double a2 = 2 * (e_xy[px] - mx * my) + kC2;
-            const double b1 = mx * mx + my * my + kC1;
-            const double b2 = (e_xx[px] - mx * mx) + (e_yy[px] - my * my) + kC2;
-            const double s = a1 * a2 / (b1 * b2);
-            ssim += s;
-            // S = A1 A2 / (B1 B2) as a function of mu_x, E[x^2] and E[xy].
-            g_mu[px] = d_s * (2 * my * (a2 - a1) / (b1 * b2) -
-                              2 * mx * s * (1 / b1 - 1 / b2));
-            g_xx[px] = d_s * (-s / b2);
-            g_xy[px] = d_s * (2 * a1 / (b1 * b2));
-          }
-        }
-        if (py >= r0 && py < r1) ssim_rows[py] = ssim;
-        // The window is symmetric and zero padding makes the filter
-        // self-adjoint: the backward blurs the gradient maps the same way.
-        for (int j = 0; j < kGrads; ++j)
-          std::copy(grads + j * width, grads + (j + 1) * width,
-                    padded + j * padded_width + kRadius);
-        BlurRow<kGrads>(padded, width,
-                        grad_ring + (py % kWindow) * grad_stride);
-      }
-      // (3) Row pz: L1, squared error and dL/dr.
-      const int pz = t - 2 * kRadius;
-      if (pz >= r0 && pz < r1) {
-        RingRows(grad_ring, grad_stride, pz, height, rows);
-        BlurColumn(rows, grad_stride, blurred);
-        const std::size_t first_value =
-            static_cast<std::size_t>(pz) * width * 3;
-        double l1 = 0, mse = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double *g_mu = blurred + c * width,
-                       *g_xx = blurred + (3 + c) * width,
-                       *g_xy = blurred + (6 + c) * width;
-          for (int px = 0; px < width; ++px) {
-            const std::size_t i = first_value + px * 3 + c;
-            const double xv = x[i], yv = y[i], diff = xv - yv;
-            l1 += std::abs(diff);
-            mse += diff * diff;
-            if (d_rendered == nullptr) continue;
-            // d|d|/dd = sign(d), 0 at 0 (a subgradient).
-            const double d_l1 =
-                (1 - ssim_weight) * scale * ((diff > 0) - (diff < 0));
-            (*d_rendered)[i] = static_cast<float>(
-                d_l1 + g_mu[px] + 2 * xv * g_xx[px] + yv * g_xy[px]);
-          }
-        }
-        l1_rows[pz] = l1;
-        mse_rows[pz] = mse;
-      }
-    }
+    pass.Band(band, bands, &b.threads[band]);
   }
 
   PhotometricLoss loss;

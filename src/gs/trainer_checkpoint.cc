@@ -189,7 +189,10 @@ void Trainer::RestoreArrays(const CheckpointReader& file,
     if (step == state.adam_steps.end())
       throw Error(source, "adam_steps", name, "missing");
     adam->set_step(step->second);
-    adam->RestoreRows();
+    if (const std::string problem = adam->RestoreRows(); !problem.empty()) {
+      throw Error(source, std::string("adam.") + name, "",
+                  problem + " (corrupt checkpoint)");
+    }
   }
   DensifyStatistics& densify = strategy_.statistics();
   std::vector<float> counts;

@@ -243,14 +243,16 @@ std::vector<BenchScene> FindBenchScenes(const fs::path& root,
   return scenes;
 }
 
-BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
+namespace {
+
+// Every scene through `pano4d run` (one workspace each, resumable).
+std::vector<Entry> RunScenes(const BenchDatasetsOptions& o) {
   std::vector<std::pair<fs::path, std::string>> scenes;
   for (const BenchScene& scene : FindBenchScenes(o.root, o.suite, o.scenes))
     scenes.emplace_back(scene.dir, scene.suite);
   const fs::path executable =
       o.executable.empty() ? fs::read_symlink("/proc/self/exe") : o.executable;
   EnsureDirectory(o.workspace);
-
   std::vector<Entry> entries;
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     const auto& [dir, suite] = scenes[i];
@@ -264,25 +266,16 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
                       << (e.error.empty() ? "" : " (" + e.error + ")") << ", "
                       << e.seconds << " s";
   }
+  return entries;
+}
 
-  BenchResult result;
-  std::ostringstream md, csv;
-  md << "# pano4d bench datasets: " << o.root.string() << "\n\n"
-     << "Each scene: `pano4d run --dataset <scene> --eval` at its protocol's "
-        "factor"
-     << (o.iterations > 0 ? ", " + std::to_string(o.iterations) + " iterations"
-                          : std::string(", the default schedule"))
-     << "; seconds and peak memory of that run. Published rows follow each "
-        "scene where a source gives per-scene numbers.\n\n";
-  const std::string head = kBenchTableHead;
-  md << head;
-  csv << "scene,suite,method,source,status,error";
-  for (const char* key : kMetricKeys) csv << "," << key;
-  csv << ",seconds,peak_memory_mib\n";
-  std::map<std::string, nlohmann::json> benchmarks;
+// Per scene pano4d's row, then the scene's published rows.
+void WriteSceneRows(const std::vector<Entry>& entries,
+                    std::map<std::string, nlohmann::json>* benchmarks,
+                    std::ostream& md, std::ostream& csv) {
   for (const Entry& e : entries) {
-    if (!benchmarks.count(e.suite))
-      benchmarks[e.suite] = SuiteBenchmarkMeta(e.suite);
+    if (!benchmarks->count(e.suite))
+      (*benchmarks)[e.suite] = SuiteBenchmarkMeta(e.suite);
     const std::string seconds = StringPrintf("%.0f", e.seconds);
     const std::string memory = StringPrintf("%.0f", e.peak_memory_mib);
     md << BenchMarkdownRow(
@@ -291,22 +284,22 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
         e.values, seconds, memory);
     csv << TableCsvRow(e.scene, e.suite, "pano4d", "pano4d", e.status, e.error,
                        e.values, seconds, memory);
-    for (const PublishedRow& p : PublishedRows(benchmarks[e.suite], e.scene)) {
+    for (const PublishedRow& p :
+         PublishedRows((*benchmarks)[e.suite], e.scene)) {
       if (p.mean) continue;
       md << BenchMarkdownRow(e.scene, e.suite, p.method + " (" + p.source + ")",
                              p.values, "", "");
       csv << TableCsvRow(e.scene, e.suite, p.method, p.source, "published", "",
                          p.values, "", "");
     }
-    result.rows.push_back(e.ToJson());
   }
+}
 
-  // Means per suite: pano4d's over the scenes that finished here, the
-  // published means over each benchmark's own scene list.
-  md << "\n## Means per suite\n\npano4d's mean is over the scenes of this run "
-        "that finished; a published mean is over its benchmark's scenes "
-        "(datasets_meta/), which may be more.\n\n"
-     << head;
+// Means per suite: pano4d's over the scenes that finished here, the
+// published means over each benchmark's own scene list.
+void WriteSuiteMeans(const std::vector<Entry>& entries,
+                     std::map<std::string, nlohmann::json>& benchmarks,
+                     std::ostream& md, std::ostream& csv) {
   for (const std::string& suite : kBenchSuites) {
     std::vector<const Entry*> done;
     int total = 0;
@@ -344,6 +337,34 @@ BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
                          p.values, "", "");
     }
   }
+}
+
+}  // namespace
+
+BenchResult RunBenchDatasets(const BenchDatasetsOptions& o) {
+  const std::vector<Entry> entries = RunScenes(o);
+  BenchResult result;
+  std::ostringstream md, csv;
+  md << "# pano4d bench datasets: " << o.root.string() << "\n\n"
+     << "Each scene: `pano4d run --dataset <scene> --eval` at its protocol's "
+        "factor"
+     << (o.iterations > 0 ? ", " + std::to_string(o.iterations) + " iterations"
+                          : std::string(", the default schedule"))
+     << "; seconds and peak memory of that run. Published rows follow each "
+        "scene where a source gives per-scene numbers.\n\n";
+  const std::string head = kBenchTableHead;
+  md << head;
+  csv << "scene,suite,method,source,status,error";
+  for (const char* key : kMetricKeys) csv << "," << key;
+  csv << ",seconds,peak_memory_mib\n";
+  std::map<std::string, nlohmann::json> benchmarks;
+  WriteSceneRows(entries, &benchmarks, md, csv);
+  for (const Entry& e : entries) result.rows.push_back(e.ToJson());
+  md << "\n## Means per suite\n\npano4d's mean is over the scenes of this run "
+        "that finished; a published mean is over its benchmark's scenes "
+        "(datasets_meta/), which may be more.\n\n"
+     << head;
+  WriteSuiteMeans(entries, benchmarks, md, csv);
   md << "\nSeconds of a mean row: per scene; peak memory: the largest.\n";
   WriteFileAtomically(o.workspace / "datasets.md", md.str());
   WriteFileAtomically(o.workspace / "datasets.csv", csv.str());

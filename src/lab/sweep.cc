@@ -458,6 +458,120 @@ std::string SubmitSbatch(const fs::path& script) {
   return last.substr(0, last.find_first_of(";\n"));
 }
 
+namespace {
+
+// An entry's result as its status file says it.
+struct EntryResult {
+  std::string status;  // done, failed, stopped, running, missing, stale
+  std::string error;
+  MetricRow values;
+  double seconds = 0, memory = 0;
+  int attempts = 0;
+};
+
+EntryResult ReadEntryResult(const fs::path& sweep, const Json& entry) {
+  const int index = entry["index"].get<int>();
+  Json s = ReadStatus(sweep, index);
+  std::string stale;
+  if (s.is_object() && (s.value("index", -1) != index ||
+                        s.value("command", Json()) != entry["command"])) {
+    // Written for another plan of this folder: not this entry's result.
+    s = Json();
+    stale =
+        "its status is of an earlier plan of this folder; `sweep run` "
+        "runs it again";
+  }
+  EntryResult r;
+  r.status = s.is_object() ? s.value("status", "missing")
+                           : (stale.empty() ? "missing" : "stale");
+  r.error = s.is_object() ? s.value("error", "") : stale;
+  if (s.is_object() && s.contains("metrics"))
+    r.values = MetricRowFromJson(s["metrics"]);
+  r.seconds = s.is_object() ? s.value("seconds", 0.0) : 0.0;
+  r.memory = s.is_object() ? s.value("peak_memory_mib", 0.0) : 0;
+  r.attempts = s.is_object() ? s.value("attempts", 0) : 0;
+  return r;
+}
+
+std::string EntryCsvRow(const Json& e, const EntryResult& r) {
+  std::vector<std::string> fields = {std::to_string(e["index"].get<int>()),
+                                     e["scene"].get<std::string>(),
+                                     e["suite"].get<std::string>(),
+                                     e["config"].get<std::string>(),
+                                     std::to_string(e["seed"].get<int>()),
+                                     r.status,
+                                     r.error};
+  for (std::size_t k = 0; k < kNumMetrics; ++k)
+    fields.push_back(r.values[k] ? StringPrintf("%.6f", *r.values[k]) : "");
+  fields.push_back(StringPrintf("%.1f", r.seconds));
+  fields.push_back(StringPrintf("%.0f", r.memory));
+  fields.push_back(std::to_string(r.attempts));
+  return CsvRow(fields);
+}
+
+// A scene and configuration's entries: planned, and the finished ones'.
+struct ConfigRuns {
+  int planned = 0;
+  std::vector<MetricRow> done;
+  std::vector<double> seconds, memory;
+};
+
+// The mean over `rows` of each metric every row has, and its spread
+// (population standard deviation).
+void MeanAndSpread(const std::vector<MetricRow>& rows, MetricRow* mean,
+                   MetricRow* spread) {
+  for (std::size_t k = 0; k < kNumMetrics && !rows.empty(); ++k) {
+    double sum = 0, squares = 0;
+    bool all = true;
+    for (const MetricRow& r : rows) {
+      if (!r[k]) all = false;
+      if (r[k]) sum += *r[k], squares += *r[k] * *r[k];
+    }
+    if (!all) continue;
+    (*mean)[k] = sum / rows.size();
+    (*spread)[k] = std::sqrt(
+        std::max(0.0, squares / rows.size() - *(*mean)[k] * *(*mean)[k]));
+  }
+}
+
+// bench datasets' table, per scene and configuration (in `order`), each
+// scene followed by its published rows.
+void WriteConfigTable(
+    const std::vector<std::pair<std::string, std::string>>& order,
+    std::map<std::pair<std::string, std::string>, ConfigRuns>& runs,
+    std::map<std::string, std::string>& suite_of, std::ostream& md) {
+  std::map<std::string, Json> benchmarks;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto& key = order[i];
+    const std::string& suite = suite_of[key.first];
+    const ConfigRuns& r = runs[key];
+    MetricRow mean, spread;
+    MeanAndSpread(r.done, &mean, &spread);
+    double secs = 0, memory = 0;
+    for (const double v : r.seconds) secs += v;
+    for (const double v : r.memory) memory = std::max(memory, v);
+    const std::string label =
+        StringPrintf("pano4d %s, mean of %zu of %d seeds", key.second.c_str(),
+                     r.done.size(), r.planned);
+    md << BenchMarkdownRow(
+        key.first, suite, label, mean,
+        r.done.empty() ? "-" : StringPrintf("%.0f", secs / r.done.size()),
+        r.done.empty() ? "-" : StringPrintf("%.0f", memory));
+    md << BenchMarkdownRow(key.first, suite,
+                           "pano4d " + key.second + ", spread", spread, "", "");
+    // After a scene's last configuration, its published rows.
+    if (i + 1 < order.size() && order[i + 1].first == key.first) continue;
+    if (!benchmarks.count(suite)) benchmarks[suite] = SuiteBenchmarkMeta(suite);
+    for (const PublishedRow& p : PublishedRows(benchmarks[suite], key.first)) {
+      if (p.mean) continue;
+      md << BenchMarkdownRow(key.first, suite, p.method + " (" + p.source + ")",
+                             p.values, "", "");
+    }
+  }
+}
+
+}  // namespace
+
 SweepTable CollectSweep(const fs::path& sweep) {
   const Json manifest = ReadSweepManifest(sweep);
   SweepTable t;
@@ -473,11 +587,7 @@ SweepTable CollectSweep(const fs::path& sweep) {
   csv << "index,scene,suite,config,seed,status,error";
   for (const char* key : kMetricKeys) csv << "," << key;
   csv << ",seconds,peak_memory_mib,attempts\n";
-  // Per scene and configuration, the finished entries' rows.
-  std::map<std::pair<std::string, std::string>, std::vector<MetricRow>> done;
-  std::map<std::pair<std::string, std::string>, std::vector<double>> seconds,
-      memory_of;
-  std::map<std::pair<std::string, std::string>, int> planned;
+  std::map<std::pair<std::string, std::string>, ConfigRuns> runs;
   std::map<std::string, std::string> suite_of;
   std::vector<std::pair<std::string, std::string>> order;
   for (const Json& e : manifest["entries"]) {
@@ -486,108 +596,37 @@ SweepTable CollectSweep(const fs::path& sweep) {
     const std::string scene = e["scene"], config = e["config"];
     suite_of[scene] = e["suite"];
     const auto key = std::make_pair(scene, config);
-    if (!planned.count(key)) order.push_back(key);
-    ++planned[key];
-    Json s = ReadStatus(sweep, index);
-    std::string stale;
-    if (s.is_object() && (s.value("index", -1) != index ||
-                          s.value("command", Json()) != e["command"])) {
-      // Written for another plan of this folder: not this entry's result.
-      s = Json();
-      stale =
-          "its status is of an earlier plan of this folder; `sweep run` "
-          "runs it again";
-    }
-    const std::string status = s.is_object()
-                                   ? s.value("status", "missing")
-                                   : (stale.empty() ? "missing" : "stale");
-    const std::string error = s.is_object() ? s.value("error", "") : stale;
-    const MetricRow values = s.is_object() && s.contains("metrics")
-                                 ? MetricRowFromJson(s["metrics"])
-                                 : MetricRow{};
-    const double secs = s.is_object() ? s.value("seconds", 0.0) : 0.0;
-    const double memory = s.is_object() ? s.value("peak_memory_mib", 0.0) : 0;
-    if (status == "done") {
+    ConfigRuns& r = runs[key];
+    if (r.planned++ == 0) order.push_back(key);
+    const EntryResult result = ReadEntryResult(sweep, e);
+    if (result.status == "done") {
       ++t.done;
-      done[key].push_back(values);
-      seconds[key].push_back(secs);
-      memory_of[key].push_back(memory);
+      r.done.push_back(result.values);
+      r.seconds.push_back(result.seconds);
+      r.memory.push_back(result.memory);
     } else {
-      status == "missing" || status == "stale" ? ++t.missing : ++t.failed;
-      t.problems.push_back(
-          StringPrintf("%d %s %s seed %d: %s%s", index, scene.c_str(),
-                       config.c_str(), e["seed"].get<int>(), status.c_str(),
-                       error.empty() ? "" : (": " + error).c_str()));
+      result.status == "missing" || result.status == "stale" ? ++t.missing
+                                                             : ++t.failed;
+      t.problems.push_back(StringPrintf(
+          "%d %s %s seed %d: %s%s", index, scene.c_str(), config.c_str(),
+          e["seed"].get<int>(), result.status.c_str(),
+          result.error.empty() ? "" : (": " + result.error).c_str()));
     }
     md << "| " << index << " | " << scene << " | " << config << " | "
-       << e["seed"].get<int>() << " | " << status << " |";
+       << e["seed"].get<int>() << " | " << result.status << " |";
     for (std::size_t k = 0; k < kBenchTableMetrics; ++k)
-      md << " " << BenchCell(values[k], k) << " |";
-    md << " " << StringPrintf("%.0f", secs) << " | "
-       << StringPrintf("%.0f", memory) << " |\n";
-    std::vector<std::string> fields = {std::to_string(index),
-                                       scene,
-                                       e["suite"].get<std::string>(),
-                                       config,
-                                       std::to_string(e["seed"].get<int>()),
-                                       status,
-                                       error};
-    for (std::size_t k = 0; k < kNumMetrics; ++k)
-      fields.push_back(values[k] ? StringPrintf("%.6f", *values[k]) : "");
-    fields.push_back(StringPrintf("%.1f", secs));
-    fields.push_back(StringPrintf("%.0f", memory));
-    fields.push_back(
-        std::to_string(s.is_object() ? s.value("attempts", 0) : 0));
-    csv << CsvRow(fields);
+      md << " " << BenchCell(result.values[k], k) << " |";
+    md << " " << StringPrintf("%.0f", result.seconds) << " | "
+       << StringPrintf("%.0f", result.memory) << " |\n";
+    csv << EntryCsvRow(e, result);
   }
 
-  // Per scene and configuration, bench datasets' table: the mean over the
-  // seeds that finished, their spread (population standard deviation),
-  // then the scene's published rows.
   md << "\n## Per scene and configuration\n\nbench datasets' table: per "
         "configuration the mean over the seeds that finished and their "
         "spread (population standard deviation); seconds per entry, the "
         "largest peak memory. Published rows follow each scene.\n\n"
      << kBenchTableHead;
-  std::map<std::string, Json> benchmarks;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const auto& key = order[i];
-    const std::string& suite = suite_of[key.first];
-    const std::vector<MetricRow>& rows = done[key];
-    MetricRow mean, spread;
-    for (std::size_t k = 0; k < kNumMetrics && !rows.empty(); ++k) {
-      double sum = 0, squares = 0;
-      bool all = true;
-      for (const MetricRow& r : rows) {
-        if (!r[k]) all = false;
-        if (r[k]) sum += *r[k], squares += *r[k] * *r[k];
-      }
-      if (!all) continue;
-      mean[k] = sum / rows.size();
-      spread[k] =
-          std::sqrt(std::max(0.0, squares / rows.size() - *mean[k] * *mean[k]));
-    }
-    double secs = 0, memory = 0;
-    for (const double v : seconds[key]) secs += v;
-    for (const double v : memory_of[key]) memory = std::max(memory, v);
-    const std::string label =
-        StringPrintf("pano4d %s, mean of %zu of %d seeds", key.second.c_str(),
-                     rows.size(), planned[key]);
-    md << BenchMarkdownRow(
-        key.first, suite, label, mean,
-        rows.empty() ? "-" : StringPrintf("%.0f", secs / rows.size()),
-        rows.empty() ? "-" : StringPrintf("%.0f", memory));
-    md << BenchMarkdownRow(key.first, suite,
-                           "pano4d " + key.second + ", spread", spread, "", "");
-    // After a scene's last configuration, its published rows.
-    if (i + 1 < order.size() && order[i + 1].first == key.first) continue;
-    if (!benchmarks.count(suite)) benchmarks[suite] = SuiteBenchmarkMeta(suite);
-    for (const PublishedRow& p : PublishedRows(benchmarks[suite], key.first)) {
-      if (p.mean) continue;
-      md << BenchMarkdownRow(key.first, suite, p.method + " (" + p.source + ")",
-                             p.values, "", "");
-    }
-  }
+  WriteConfigTable(order, runs, suite_of, md);
   md << "\n## Not done\n\n";
   if (t.problems.empty()) md << "Every entry finished.\n";
   for (const std::string& p : t.problems) md << "- " << p << "\n";

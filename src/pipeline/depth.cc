@@ -416,6 +416,76 @@ void UsePriorMasks(const fs::path& dir, const MaskPrior& prior,
                     << " training frames";
 }
 
+// A frame's learned depth in the SfM points' units (AlignDepthModel: an
+// affine fit in inverse depth for disparity, a scale for metric depth), or
+// as given when the model has no points. nullopt when the fit fails or does
+// not fit the points, said in `entry` and the log.
+std::optional<cv::Mat> AlignedLearnedDepth(
+    const cv::Mat& map, const std::vector<DepthSample>& samples, bool no_points,
+    bool metric, double max_depth, const std::string& name,
+    nlohmann::json* entry) {
+  if (no_points) {
+    (*entry)["as_given"] = "the model has no points";
+    return map.clone();
+  }
+  try {
+    const DepthAlignment a = AlignDepthModel(
+        map, samples,
+        metric ? DepthModel::kScale : DepthModel::kAffineDisparity);
+    (*entry)["scale"] = a.scale;
+    (*entry)["shift"] = a.shift;
+    (*entry)["samples"] = a.samples;
+    (*entry)["inliers"] = a.inliers;
+    (*entry)["median_relative_error"] = a.median_relative_error;
+    if (a.median_relative_error > kMaxLearnedDepthError) {
+      throw Error(name, "median relative error",
+                  std::to_string(a.median_relative_error),
+                  "above " + std::to_string(kMaxLearnedDepthError) +
+                      ": the learned depth does not fit the SfM points");
+    }
+    return ApplyDepthAlignment(map, a, max_depth);
+  } catch (const Error& e) {
+    (*entry)["failed"] = e.what();
+    PANO4D_LOG(kWarning) << "depth: frame " << name
+                         << " keeps its stereo depth only: " << e.what();
+    return std::nullopt;
+  }
+}
+
+// The frame's depth map with its moving pixels and its static holes filled
+// from `learned` (first corrected locally towards the stereo depth),
+// written to WS/pano4d/depth/<frame>.npy; the pixels filled in `entry`.
+void FillFromLearnedDepth(const Workspace& ws, cv::Mat learned,
+                          double smoothing, WorkspaceFrame* f,
+                          nlohmann::json* entry) {
+  cv::Mat depth = f->depth.empty()
+                      ? cv::Mat(learned.size(), CV_32F, cv::Scalar(0))
+                      : ReadDepthMap(f->depth);
+  cv::Mat moving;
+  if (!f->dynamic_mask.empty()) moving = ReadMask(f->dynamic_mask) >= 128;
+  if (smoothing > 0 && !f->depth.empty()) {
+    cv::Mat trusted = depth > 0;
+    if (!moving.empty()) trusted.setTo(0, moving);
+    learned =
+        CorrectDepthLocally(learned, depth, trusted, smoothing * depth.cols);
+  }
+  int filled_moving = 0, filled_holes = 0;
+  for (int y = 0; y < depth.rows; ++y) {
+    for (int x = 0; x < depth.cols; ++x) {
+      const float z = learned.at<float>(y, x);
+      float& d = depth.at<float>(y, x);
+      const bool is_moving = !moving.empty() && moving.at<std::uint8_t>(y, x);
+      if (!(z > 0) || (d > 0 && !is_moving)) continue;
+      d = z;
+      ++(is_moving ? filled_moving : filled_holes);
+    }
+  }
+  (*entry)["filled_moving_pixels"] = filled_moving;
+  (*entry)["filled_static_pixels"] = filled_holes;
+  f->depth = ws.depth_map(f->name);
+  WriteDepthMap(f->depth, depth);
+}
+
 // Each training frame's learned depth, aligned to its SfM points (an affine
 // in inverse depth for disparity, a scale for metric depth) and corrected
 // locally towards its stereo depth (CorrectDepthLocally, Gaussian of
@@ -454,8 +524,6 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
     max_depth =
         kMaxLearnedDepthFactor * sample_depths[sample_depths.size() * 98 / 100];
   }
-  const DepthModel depth_model =
-      metric ? DepthModel::kScale : DepthModel::kAffineDisparity;
   nlohmann::json report = nlohmann::json::array();
   ProgressBar bar("learned depth",
                   static_cast<std::int64_t>(frames->train.size()));
@@ -467,63 +535,17 @@ void MergeLearnedDepth(const Workspace& ws, const ColmapModel& model,
       report.push_back({{"frame", f.name}, {"learned", "no file"}});
       continue;
     }
-    const cv::Mat& map = maps[i];
     nlohmann::json entry = {{"frame", f.name},
                             {"model", metric ? "scale" : "affine disparity"}};
-    cv::Mat learned;
-    if (model.points3D.empty()) {
-      learned = map.clone();
-      entry["as_given"] = "the model has no points";
-    } else {
-      try {
-        const DepthAlignment a = AlignDepthModel(map, samples[i], depth_model);
-        entry["scale"] = a.scale;
-        entry["shift"] = a.shift;
-        entry["samples"] = a.samples;
-        entry["inliers"] = a.inliers;
-        entry["median_relative_error"] = a.median_relative_error;
-        if (a.median_relative_error > kMaxLearnedDepthError) {
-          throw Error(f.name, "median relative error",
-                      std::to_string(a.median_relative_error),
-                      "above " + std::to_string(kMaxLearnedDepthError) +
-                          ": the learned depth does not fit the SfM points");
-        }
-        learned = ApplyDepthAlignment(map, a, max_depth);
-      } catch (const Error& e) {
-        entry["failed"] = e.what();
-        summary->alignment_failed.push_back(f.name);
-        PANO4D_LOG(kWarning) << "depth: frame " << f.name
-                             << " keeps its stereo depth only: " << e.what();
-        report.push_back(entry);
-        continue;
-      }
+    const std::optional<cv::Mat> learned =
+        AlignedLearnedDepth(maps[i], samples[i], model.points3D.empty(), metric,
+                            max_depth, f.name, &entry);
+    if (!learned) {
+      summary->alignment_failed.push_back(f.name);
+      report.push_back(entry);
+      continue;
     }
-    cv::Mat depth = f.depth.empty()
-                        ? cv::Mat(learned.size(), CV_32F, cv::Scalar(0))
-                        : ReadDepthMap(f.depth);
-    cv::Mat moving;
-    if (!f.dynamic_mask.empty()) moving = ReadMask(f.dynamic_mask) >= 128;
-    if (smoothing > 0 && !f.depth.empty()) {
-      cv::Mat trusted = depth > 0;
-      if (!moving.empty()) trusted.setTo(0, moving);
-      learned =
-          CorrectDepthLocally(learned, depth, trusted, smoothing * depth.cols);
-    }
-    int filled_moving = 0, filled_holes = 0;
-    for (int y = 0; y < depth.rows; ++y) {
-      for (int x = 0; x < depth.cols; ++x) {
-        const float z = learned.at<float>(y, x);
-        float& d = depth.at<float>(y, x);
-        const bool is_moving = !moving.empty() && moving.at<std::uint8_t>(y, x);
-        if (!(z > 0) || (d > 0 && !is_moving)) continue;
-        d = z;
-        ++(is_moving ? filled_moving : filled_holes);
-      }
-    }
-    entry["filled_moving_pixels"] = filled_moving;
-    entry["filled_static_pixels"] = filled_holes;
-    f.depth = ws.depth_map(f.name);
-    WriteDepthMap(f.depth, depth);
+    FillFromLearnedDepth(ws, *learned, smoothing, &f, &entry);
     ++summary->with_learned_depth;
     report.push_back(entry);
   }
@@ -594,6 +616,27 @@ void MakeMovingDepthConsistent(const Workspace& ws, const FlowPrior& flow,
   PANO4D_LOG(kInfo) << "depth: moving depth made consistent along the flow "
                        "over "
                     << order.size() << " frames";
+}
+
+// The priors' depth merged into the stereo depth (MergeLearnedDepth), and
+// with flow among the priors the moving depth made consistent along it.
+void UseLearnedDepth(const Workspace& ws, const DepthOptions& o,
+                     const ColmapModel& model, const PriorsFolder& priors,
+                     const std::vector<PriorFrame>& video,
+                     WorkspaceFrames* frames, DepthSummary* summary) {
+  const std::optional<DepthPrior> depth = ReadDepthPrior(priors, video);
+  if (!depth) return;
+  MergeLearnedDepth(ws, model, *depth, o.learned_depth_smoothing, video, frames,
+                    summary);
+  if (summary->with_learned_depth == 0) return;
+  frames->depth_source = kDepthFromPriors;
+  if (!o.consistent_moving_depth) return;
+  if (const std::optional<FlowPrior> flow = ReadFlowPrior(priors, video))
+    MakeMovingDepthConsistent(ws, *flow, video, *frames);
+  else
+    PANO4D_LOG(kInfo) << "depth: moving depth aligned per frame only: "
+                         "no flow among the priors to make it "
+                         "consistent along";
 }
 
 }  // namespace
@@ -751,23 +794,8 @@ DepthSummary RunDepth(const Workspace& ws, const DepthOptions& o) {
     StereoDepth(ws, o, model, &frames);
   else if (frames.depth_source == kDepthFromExternal)
     AlignExternalDepth(ws, o, model, &frames);
-  if (priors && frames.depth_source == kDepthFromStereo) {
-    if (const std::optional<DepthPrior> depth =
-            ReadDepthPrior(*priors, video)) {
-      MergeLearnedDepth(ws, model, *depth, o.learned_depth_smoothing, video,
-                        &frames, &summary);
-      if (summary.with_learned_depth > 0)
-        frames.depth_source = kDepthFromPriors;
-      if (o.consistent_moving_depth && summary.with_learned_depth > 0) {
-        if (const std::optional<FlowPrior> flow = ReadFlowPrior(*priors, video))
-          MakeMovingDepthConsistent(ws, *flow, video, frames);
-        else
-          PANO4D_LOG(kInfo) << "depth: moving depth aligned per frame only: "
-                               "no flow among the priors to make it "
-                               "consistent along";
-      }
-    }
-  }
+  if (priors && frames.depth_source == kDepthFromStereo)
+    UseLearnedDepth(ws, o, model, *priors, video, &frames, &summary);
   frames.priors = o.priors.empty() ? fs::path() : fs::absolute(o.priors);
   frames.depth_options = o.ToJson();
   WriteWorkspaceFrames(ws.root(), frames);

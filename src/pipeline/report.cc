@@ -222,6 +222,78 @@ std::string PlanTable(const nlohmann::json& plan) {
   return s.str();
 }
 
+// The scene at its canonical time as a PLY, and the panoramas (the static
+// one and the middle time's).
+void SceneFiles(const Workspace& ws, const GaussianScene& scene, Writer* out,
+                ReportSummary* summary) {
+  GaussianModel model;
+  scene.ComposeAt(scene.canonical_time, &model);
+  const std::string ply =
+      "scene_t" + std::to_string(scene.canonical_time) + ".ply";
+  WritePly(summary->dir / ply, model);
+  summary->files.push_back(ply);
+  const fs::path panoramas = ws.panorama();
+  if (fs::exists(panoramas / "static.png"))
+    out->Copy(panoramas / "static.png", "panorama_static.png");
+  std::vector<fs::path> per_time;
+  if (fs::is_directory(panoramas)) {
+    for (const auto& e : fs::directory_iterator(panoramas))
+      if (e.path().filename() != "static.png") per_time.push_back(e.path());
+  }
+  std::sort(per_time.begin(), per_time.end());
+  if (!per_time.empty())
+    out->Copy(per_time[per_time.size() / 2], "panorama_middle.png");
+}
+
+// index.md's opening: the input, the fit's size and the share COLMAP posed.
+std::string InputSection(const Workspace& ws, const nlohmann::json& plan,
+                         const nlohmann::json& fit,
+                         const WorkspaceFrames& frames) {
+  std::ostringstream md;
+  md << "Input: " << plan.at("input").value("kind", "") << " `"
+     << plan.at("input").value("path", "") << "`; " << frames.train.size()
+     << " training and " << frames.val.size() << " validation frames; "
+     << fit.value("iterations", 0) << " fit iterations, "
+     << fit.value("static_gaussians", 0) << " static and "
+     << fit.value("dynamic_gaussians", 0) << " dynamic Gaussians.\n\n";
+  const nlohmann::json facts = plan.value("facts", nlohmann::json::object());
+  if (facts.value("sfm_frames", nlohmann::json()).is_number()) {
+    const int given = facts["sfm_frames"].get<int>();
+    const int posed = facts.value("sfm_posed", 0);
+    md << "COLMAP posed " << posed << " of " << given << " frames ("
+       << StringPrintf("%.1f%%", 100.0 * posed / std::max(1, given)) << ")";
+    if (posed < given) {
+      md << "; the " << given - posed
+         << " unposed frames are not in the fit (why: "
+         << ws.sfm_json().string() << ", key diagnosis)";
+    }
+    md << ".\n\n";
+  }
+  return md.str();
+}
+
+// The metrics table, with how to reproduce it.
+std::string MetricsSection(const Workspace& ws, const WorkspaceFrames& frames,
+                           const fs::path& dir) {
+  std::ostringstream md;
+  md << "## Metrics (beside the published rows)\n\n";
+  if (!frames.dataset.empty()) {
+    md << "Reproduce with `pano4d eval --dataset " << frames.dataset.string()
+       << " --factor " << frames.dataset_factor << " --renders "
+       << ws.val_renders().string() << "`. ";
+  }
+  if (fs::exists(frames.dataset / "synth.json")) {
+    md << "This scene is synthetic and the published means are over "
+          "DyCheck's real iPhone captures: compare the pattern across the "
+          "columns (full, covisible m*, unseen u*), not the values.";
+  }
+  md << "\n\n";
+  std::string table = ReadTextFile(dir / "metrics.md");
+  if (table.rfind("# ", 0) == 0) table = table.substr(table.find('\n') + 1);
+  md << table << "\n";
+  return md.str();
+}
+
 }  // namespace
 
 ReportSummary WriteReport(const Workspace& ws) {
@@ -252,67 +324,13 @@ ReportSummary WriteReport(const Workspace& ws) {
     out.Copy(ws.metrics() / "per_frame.csv", "per_frame.csv");
   }
   ValidationViews(ws, frames, &out);
-
-  const GaussianScene& scene = fitted.scene;
   ExpandedViews(ws, fitted, &out);
-  GaussianModel model;
-  scene.ComposeAt(scene.canonical_time, &model);
-  const std::string ply =
-      "scene_t" + std::to_string(scene.canonical_time) + ".ply";
-  WritePly(summary.dir / ply, model);
-  summary.files.push_back(ply);
-
-  const fs::path panoramas = ws.panorama();
-  if (fs::exists(panoramas / "static.png"))
-    out.Copy(panoramas / "static.png", "panorama_static.png");
-  std::vector<fs::path> per_time;
-  if (fs::is_directory(panoramas)) {
-    for (const auto& e : fs::directory_iterator(panoramas))
-      if (e.path().filename() != "static.png") per_time.push_back(e.path());
-  }
-  std::sort(per_time.begin(), per_time.end());
-  if (!per_time.empty())
-    out.Copy(per_time[per_time.size() / 2], "panorama_middle.png");
+  SceneFiles(ws, fitted.scene, &out, &summary);
 
   std::ostringstream md;
-  md << "# pano4d report\n\n";
-  md << "Input: " << plan.at("input").value("kind", "") << " `"
-     << plan.at("input").value("path", "") << "`; " << frames.train.size()
-     << " training and " << frames.val.size() << " validation frames; "
-     << fit.value("iterations", 0) << " fit iterations, "
-     << fit.value("static_gaussians", 0) << " static and "
-     << fit.value("dynamic_gaussians", 0) << " dynamic Gaussians.\n\n";
-  const nlohmann::json facts = plan.value("facts", nlohmann::json::object());
-  if (facts.value("sfm_frames", nlohmann::json()).is_number()) {
-    const int given = facts["sfm_frames"].get<int>();
-    const int posed = facts.value("sfm_posed", 0);
-    md << "COLMAP posed " << posed << " of " << given << " frames ("
-       << StringPrintf("%.1f%%", 100.0 * posed / std::max(1, given)) << ")";
-    if (posed < given) {
-      md << "; the " << given - posed
-         << " unposed frames are not in the fit (why: "
-         << ws.sfm_json().string() << ", key diagnosis)";
-    }
-    md << ".\n\n";
-  }
+  md << "# pano4d report\n\n" << InputSection(ws, plan, fit, frames);
   md << "## Stages\n\n" << PlanTable(plan) << "\n";
-  if (evaluated) {
-    md << "## Metrics (beside the published rows)\n\n";
-    if (!frames.dataset.empty()) {
-      md << "Reproduce with `pano4d eval --dataset " << frames.dataset.string()
-         << " --factor " << frames.dataset_factor << " --renders "
-         << ws.val_renders().string() << "`. ";
-    }
-    if (fs::exists(frames.dataset / "synth.json")) {
-      md << "This scene is synthetic and the published means are over "
-            "DyCheck's real iPhone captures: compare the pattern across the "
-            "columns (full, covisible m*, unseen u*), not the values.";
-    }
-    md << "\n\n";
-    std::string table = ReadTextFile(summary.dir / "metrics.md");
-    if (table.rfind("# ", 0) == 0) table = table.substr(table.find('\n') + 1);
-    md << table << "\n";
-  }
+  if (evaluated) md << MetricsSection(ws, frames, summary.dir);
   md << "## Error against run time\n\n![fit](fit.png)\n\n";
   md << "## Validation views\n\nGround truth, render, and the error x"
      << kErrorGain

@@ -74,7 +74,15 @@ void WritePly(const std::filesystem::path& path, const GaussianModel& model) {
   WriteFileAtomically(path, buffer.str());
 }
 
-GaussianModel ReadPly(std::istream& in, const std::string& source) {
+namespace {
+
+// A splat PLY's header: the vertex count and the float properties in order.
+struct PlyHeader {
+  std::int64_t count = -1;
+  std::vector<std::string> properties;
+};
+
+PlyHeader ReadPlyHeader(std::istream& in, const std::string& source) {
   std::string line;
   std::size_t header_bytes = 0;
   const auto next = [&]() {
@@ -88,8 +96,7 @@ GaussianModel ReadPly(std::istream& in, const std::string& source) {
   };
   if (next() != "ply")
     throw Error::In(source, "not a PLY file (no 'ply' magic line)");
-  std::int64_t count = -1;
-  std::vector<std::string> properties;
+  PlyHeader header;
   bool in_vertex = false;
   while (next() != "end_header") {
     std::istringstream words(line);
@@ -106,16 +113,15 @@ GaussianModel ReadPly(std::istream& in, const std::string& source) {
       std::string name;
       std::int64_t n = -1;
       words >> name >> n;
-      if (name == "vertex") {
-        if (n < 0)
-          throw Error(source, "element vertex", line,
-                      "expected a non-negative count");
-        count = n;
-        in_vertex = true;
-      } else {
+      if (name != "vertex") {
         throw Error(source, "element", name,
                     "only a 'vertex' element is expected in a splat file");
       }
+      if (n < 0)
+        throw Error(source, "element vertex", line,
+                    "expected a non-negative count");
+      header.count = n;
+      in_vertex = true;
     } else if (keyword == "property") {
       std::string type, name;
       words >> type >> name;
@@ -125,13 +131,39 @@ GaussianModel ReadPly(std::istream& in, const std::string& source) {
         throw Error(source, "property " + name, type,
                     "splat properties must be float");
       }
-      properties.push_back(name);
+      header.properties.push_back(name);
     } else if (keyword != "comment" && keyword != "obj_info") {
       throw Error(source, "header", line, "unexpected line in a PLY header");
     }
   }
-  if (count < 0) throw Error::In(source, "PLY header has no 'element vertex'");
+  if (header.count < 0)
+    throw Error::In(source, "PLY header has no 'element vertex'");
+  return header;
+}
 
+// Refuses a vertex count the rest of the stream cannot hold, before
+// anything is allocated for it.
+void CheckVertexData(std::istream& in, const PlyHeader& header,
+                     const std::string& source) {
+  const std::streampos start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff available = in.tellg() - start;
+  in.seekg(start);
+  const std::uint64_t stride = header.properties.size() * sizeof(float);
+  if (static_cast<std::uint64_t>(header.count) >
+      static_cast<std::uint64_t>(available) /
+          std::max<std::uint64_t>(stride, 1)) {
+    throw Error(source, "element vertex", std::to_string(header.count),
+                "the file holds only " + std::to_string(available) +
+                    " bytes of vertex data");
+  }
+}
+
+}  // namespace
+
+GaussianModel ReadPly(std::istream& in, const std::string& source) {
+  const PlyHeader header = ReadPlyHeader(in, source);
+  const std::vector<std::string>& properties = header.properties;
   std::map<std::string, std::size_t> column;
   int rest = 0;
   for (std::size_t i = 0; i < properties.size(); ++i) {
@@ -145,27 +177,15 @@ GaussianModel ReadPly(std::istream& in, const std::string& source) {
     if (!column.count(name))
       throw Error(source, "property", name, "missing from the PLY header");
   }
-
-  // The vertex data must be all there before anything is allocated for it.
-  const std::streampos start = in.tellg();
-  in.seekg(0, std::ios::end);
-  const std::streamoff available = in.tellg() - start;
-  in.seekg(start);
-  const std::uint64_t stride = properties.size() * sizeof(float);
-  if (static_cast<std::uint64_t>(count) >
-      static_cast<std::uint64_t>(available) /
-          std::max<std::uint64_t>(stride, 1)) {
-    throw Error(source, "element vertex", std::to_string(count),
-                "the file holds only " + std::to_string(available) +
-                    " bytes of vertex data");
-  }
+  CheckVertexData(in, header, source);
+  const std::int64_t count = header.count;
   model.Resize(static_cast<std::size_t>(count));
   const int k_count = model.sh_coefficients();
   std::vector<float> row(properties.size());
   const auto at = [&](const char* name) { return row[column.at(name)]; };
   for (std::int64_t i = 0; i < count; ++i) {
     if (!in.read(reinterpret_cast<char*>(row.data()),
-                 static_cast<std::streamsize>(stride))) {
+                 static_cast<std::streamsize>(row.size() * sizeof(float)))) {
       throw Error::In(source, "vertex data ends early");
     }
     const char* axes[] = {"x", "y", "z"};
