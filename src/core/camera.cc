@@ -91,6 +91,24 @@ void AngleFromNormalized(const T& u, const T& v, T* a, T* b) {
   }
 }
 
+// The FOV model's radial factor at r^2 for field of view omega, with
+// COLMAP's series expansions near omega = 0 and r = 0, where the closed form
+// is 0/0.
+template <typename T>
+T FovFactor(double omega, const T& r2) {
+  const double omega2 = omega * omega;
+  constexpr double kFovSeriesEpsilon = 1e-4;
+  if (omega2 < kFovSeriesEpsilon)
+    return (omega2 * r2) / 3.0 - omega2 / 12.0 + 1.0;
+  if (Value(r2) < kFovSeriesEpsilon) {
+    const double tan_half = std::tan(omega / 2);
+    return (-2.0 * tan_half * (4.0 * r2 * tan_half * tan_half - 3.0)) /
+           (3.0 * omega);
+  }
+  const T r = Sqrt(r2);
+  return Atan(T(r * (2.0 * std::tan(omega / 2)))) / (r * omega);
+}
+
 // The distortion proper, COLMAP's formulas: maps (u, v) (normalized, or angle
 // coordinates for fisheye models) to distorted coordinates. `k` points at the
 // model's extra parameters.
@@ -164,22 +182,7 @@ void Distort(CameraModelId id, const double* k, const T& u, const T& v, T* ud,
       return;
     }
     case CameraModelId::kFOV: {
-      // COLMAP's series expansions near omega = 0 and r = 0, where the
-      // closed form is 0/0.
-      const double omega = k[0];
-      const double omega2 = omega * omega;
-      constexpr double kFovSeriesEpsilon = 1e-4;
-      T factor;
-      if (omega2 < kFovSeriesEpsilon) {
-        factor = (omega2 * r2) / 3.0 - omega2 / 12.0 + 1.0;
-      } else if (Value(r2) < kFovSeriesEpsilon) {
-        const double tan_half = std::tan(omega / 2);
-        factor = (-2.0 * tan_half * (4.0 * r2 * tan_half * tan_half - 3.0)) /
-                 (3.0 * omega);
-      } else {
-        const T r = Sqrt(r2);
-        factor = Atan(T(r * (2.0 * std::tan(omega / 2)))) / (r * omega);
-      }
+      const T factor = FovFactor(k[0], r2);
       *ud = u * factor;
       *vd = v * factor;
       return;
@@ -356,6 +359,32 @@ std::optional<Eigen::Vector2d> Camera::Project(
   return pixel;
 }
 
+namespace {
+
+// The normalized coordinates and unit ray of the undistorted point x
+// (angle coordinates for a fisheye model); false beyond the fisheye
+// models' domain.
+bool SetRay(bool fisheye, const Eigen::Vector2d& x, UnprojectResult* result) {
+  if (!fisheye) {
+    result->normalized = x;
+    result->ray = Eigen::Vector3d(x.x(), x.y(), 1.0).normalized();
+    return true;
+  }
+  const double theta = x.norm();
+  if (theta >= kMaxFisheyeAngle) return false;
+  const Eigen::Vector2d axis = theta > kFisheyeAxisEpsilon
+                                   ? Eigen::Vector2d(x / theta)
+                                   : Eigen::Vector2d::Zero();
+  const double tan_over_theta =
+      theta > kFisheyeAxisEpsilon ? std::tan(theta) / theta : 1.0;
+  result->normalized = x * tan_over_theta;
+  result->ray = Eigen::Vector3d(std::sin(theta) * axis.x(),
+                                std::sin(theta) * axis.y(), std::cos(theta));
+  return true;
+}
+
+}  // namespace
+
 UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
   UnprojectResult result;
   if (!pixel.allFinite()) return result;  // kInvalidInput
@@ -419,21 +448,8 @@ UnprojectResult Camera::Unproject(const Eigen::Vector2d& pixel) const {
   if (residual > kUndistortTolerance * scale)
     return fail(UnprojectStatus::kNotConverged);
 
-  if (model.fisheye) {
-    const double theta = x.norm();
-    if (theta >= kMaxFisheyeAngle) return fail(UnprojectStatus::kOutsideDomain);
-    const Eigen::Vector2d axis = theta > kFisheyeAxisEpsilon
-                                     ? Eigen::Vector2d(x / theta)
-                                     : Eigen::Vector2d::Zero();
-    const double tan_over_theta =
-        theta > kFisheyeAxisEpsilon ? std::tan(theta) / theta : 1.0;
-    result.normalized = x * tan_over_theta;
-    result.ray = Eigen::Vector3d(std::sin(theta) * axis.x(),
-                                 std::sin(theta) * axis.y(), std::cos(theta));
-  } else {
-    result.normalized = x;
-    result.ray = Eigen::Vector3d(x.x(), x.y(), 1.0).normalized();
-  }
+  if (!SetRay(model.fisheye, x, &result))
+    return fail(UnprojectStatus::kOutsideDomain);
   result.residual_px = (PixelFromNormalized(result.normalized) - pixel).norm();
   result.status = UnprojectStatus::kOk;
   return result;

@@ -197,9 +197,11 @@ SignalsForwarded::~SignalsForwarded() {
 
 int SignalsForwarded::Received() { return g_forward; }
 
-ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
-                         const fs::path& log, const ProcessOptions& options) {
-  if (argv_strings.empty())
+namespace {
+
+void CheckProcessOptions(const std::vector<std::string>& argv,
+                         const ProcessOptions& options) {
+  if (argv.empty())
     throw Error("RunProcess", "argv", "", "no executable given");
   if (options.forward_signals && options.own_group) {
     throw Error("RunProcess", "forward_signals", "true",
@@ -211,6 +213,13 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
                 "a time limit stops the child's own process group: set "
                 "own_group");
   }
+}
+
+// Starts argv with stdout and stderr appended to `log` (which begins with
+// the command line) and stdin from /dev/null, in its own process group when
+// asked. Returns its pid.
+pid_t Spawn(const std::vector<std::string>& argv_strings, const fs::path& log,
+            bool own_group) {
   EnsureDirectory(log.parent_path());
   {
     std::ofstream header(log, std::ios::trunc);
@@ -232,13 +241,10 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
                                    O_RDONLY, 0);
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
-  if (options.own_group) {
+  if (own_group) {
     posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
     posix_spawnattr_setpgroup(&attributes, 0);
   }
-  std::optional<SignalsRemembered> remembered;
-  if (options.own_group) remembered.emplace();
-  const Timer timer;
   pid_t pid = 0;
   const int spawn_error =
       posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
@@ -248,6 +254,30 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
     throw Error(argv_strings[0], "", "",
                 std::string("cannot start: ") + std::strerror(spawn_error));
   }
+  return pid;
+}
+
+// Waits for a child in pano4d's group, through interruptions.
+int WaitPlain(pid_t pid, rusage* usage, const std::string& what) {
+  int status = 0;
+  while (wait4(pid, &status, 0, usage) < 0) {
+    if (errno != EINTR) {
+      throw Error(what, "", "",
+                  std::string("wait4 failed: ") + std::strerror(errno));
+    }
+  }
+  return status;
+}
+
+}  // namespace
+
+ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
+                         const fs::path& log, const ProcessOptions& options) {
+  CheckProcessOptions(argv_strings, options);
+  std::optional<SignalsRemembered> remembered;
+  if (options.own_group) remembered.emplace();
+  const Timer timer;
+  const pid_t pid = Spawn(argv_strings, log, options.own_group);
   const std::string& what = argv_strings[0];
   int status = 0;
   rusage usage{};
@@ -255,12 +285,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_strings,
   if (options.forward_signals) {
     status = WaitForwarding(pid, &usage, what);
   } else if (!options.own_group) {
-    while (wait4(pid, &status, 0, &usage) < 0) {
-      if (errno != EINTR) {
-        throw Error(what, "", "",
-                    std::string("wait4 failed: ") + std::strerror(errno));
-      }
-    }
+    status = WaitPlain(pid, &usage, what);
   } else {
     const double limit =
         options.timeout_seconds > 0 ? options.timeout_seconds : -1.0;

@@ -62,15 +62,13 @@ DepthAlignment AlignDepth(const cv::Mat& depth,
   return AlignDepthModel(depth, samples, DepthModel::kAffineDepth, options);
 }
 
-DepthAlignment AlignDepthModel(const cv::Mat& map,
-                               const std::vector<DepthSample>& samples,
-                               DepthModel model,
-                               const DepthAlignmentOptions& options) {
-  options.Check();
-  if (map.empty() || map.type() != CV_32FC1)
-    throw Error("depth alignment", "depth", "", "expected a CV_32F map");
-  const bool disparity = model == DepthModel::kAffineDisparity;
-  std::vector<double> ds, zs;
+namespace {
+
+// The map's value under each usable sample (finite, inside, positive depth
+// unless the map is a disparity) and the sample's depth.
+void SamplePairs(const cv::Mat& map, const std::vector<DepthSample>& samples,
+                 bool disparity, std::vector<double>* ds,
+                 std::vector<double>* zs) {
   for (const DepthSample& s : samples) {
     if (!s.pixel.allFinite() || !(s.z > 0) || !std::isfinite(s.z)) continue;
     const int u = static_cast<int>(std::floor(s.pixel.x()));
@@ -78,9 +76,55 @@ DepthAlignment AlignDepthModel(const cv::Mat& map,
     if (u < 0 || v < 0 || u >= map.cols || v >= map.rows) continue;
     const float d = map.at<float>(v, u);
     if (!std::isfinite(d) || (!disparity && !(d > 0))) continue;
-    ds.push_back(d);
-    zs.push_back(s.z);
+    ds->push_back(d);
+    zs->push_back(s.z);
   }
+}
+
+// The start of the robust fit: the plain least-squares fit of the same
+// residuals (linear in scale and shift for every model); for an affine
+// depth the unweighted line z = s d + b, as pano4d has always started.
+void LeastSquaresStart(const Eigen::VectorXd& d, const Eigen::VectorXd& z,
+                       DepthModel model, double* scale, double* shift) {
+  Eigen::MatrixXd design(d.size(), model == DepthModel::kScale ? 1 : 2);
+  Eigen::VectorXd target(d.size());
+  for (Eigen::Index i = 0; i < d.size(); ++i) {
+    switch (model) {
+      case DepthModel::kAffineDisparity:
+        design.row(i) << z[i] * d[i], z[i];
+        target[i] = 1.0;
+        break;
+      case DepthModel::kScale:
+        design(i, 0) = d[i] / z[i];
+        target[i] = 1.0;
+        break;
+      default:  // replaced below
+        design.row(i) << d[i] / z[i], 1.0 / z[i];
+        target[i] = 1.0;
+    }
+  }
+  const Eigen::VectorXd start = design.colPivHouseholderQr().solve(target);
+  *scale = start[0];
+  *shift = model == DepthModel::kScale ? 0.0 : start[1];
+  if (model == DepthModel::kAffineDepth) {
+    const double d_mean = d.mean(), z_mean = z.mean();
+    const double d_var = (d.array() - d_mean).square().mean();
+    *scale = ((d.array() - d_mean) * (z.array() - z_mean)).mean() / d_var;
+    *shift = z_mean - *scale * d_mean;
+  }
+}
+
+}  // namespace
+
+DepthAlignment AlignDepthModel(const cv::Mat& map,
+                               const std::vector<DepthSample>& samples,
+                               DepthModel model,
+                               const DepthAlignmentOptions& options) {
+  options.Check();
+  if (map.empty() || map.type() != CV_32FC1)
+    throw Error("depth alignment", "depth", "", "expected a CV_32F map");
+  std::vector<double> ds, zs;
+  SamplePairs(map, samples, model == DepthModel::kAffineDisparity, &ds, &zs);
   DepthAlignment a;
   a.model = model;
   a.samples = static_cast<int>(ds.size());
@@ -98,34 +142,8 @@ DepthAlignment AlignDepthModel(const cv::Mat& map,
     throw Error("depth alignment", "depth", std::to_string(d_mean),
                 "constant under the sparse points: the scale is undetermined");
   }
-  // Start: the plain least-squares fit of the same residuals (linear in
-  // scale and shift for every model).
-  Eigen::MatrixXd design(ds.size(), model == DepthModel::kScale ? 1 : 2);
-  Eigen::VectorXd target(ds.size());
-  for (std::size_t i = 0; i < ds.size(); ++i) {
-    switch (model) {
-      case DepthModel::kAffineDisparity:
-        design.row(i) << z[i] * d[i], z[i];
-        target[i] = 1.0;
-        break;
-      case DepthModel::kScale:
-        design(i, 0) = d[i] / z[i];
-        target[i] = 1.0;
-        break;
-      default:  // replaced below
-        design.row(i) << d[i] / z[i], 1.0 / z[i];
-        target[i] = 1.0;
-    }
-  }
-  const Eigen::VectorXd start = design.colPivHouseholderQr().solve(target);
-  double scale = start[0];
-  double shift = model == DepthModel::kScale ? 0.0 : start[1];
-  if (model == DepthModel::kAffineDepth) {
-    // The unweighted line z = s d + b, as pano4d has always started.
-    const double z_mean = z.mean();
-    scale = ((d.array() - d_mean) * (z.array() - z_mean)).mean() / d_var;
-    shift = z_mean - scale * d_mean;
-  }
+  double scale = 0, shift = 0;
+  LeastSquaresStart(d, z, model, &scale, &shift);
 
   ceres::Problem problem;
   for (std::size_t i = 0; i < ds.size(); ++i) {

@@ -23,6 +23,126 @@ constexpr double kMaxWorldScaleFraction = 0.1;
 
 float Sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
 
+float LargestScale(const GaussianModel& model, std::size_t row) {
+  const float* s = &model.log_scales[row * 3];
+  return std::exp(std::max({s[0], s[1], s[2]}));
+}
+
+struct Candidate {
+  float gradient;
+  std::uint32_t row;  // in the composed order
+};
+
+// The rows whose mean screen-space gradient reaches `threshold`, at most
+// `budget` of them (the largest gradients first), in row order.
+std::vector<Candidate> DensifyCandidates(const DensifyStatistics& stats,
+                                         double threshold,
+                                         std::int64_t budget) {
+  std::vector<Candidate> candidates;
+  for (std::size_t i = 0; i < stats.gradient.size(); ++i) {
+    if (stats.count[i] == 0) continue;
+    const float g = stats.gradient[i] / stats.count[i];
+    if (g >= threshold)
+      candidates.push_back({g, static_cast<std::uint32_t>(i)});
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) {
+                     return a.gradient > b.gradient;
+                   });
+  if (static_cast<std::int64_t>(candidates.size()) > budget)
+    candidates.resize(budget);
+  std::sort(
+      candidates.begin(), candidates.end(),
+      [](const Candidate& a, const Candidate& b) { return a.row < b.row; });
+  return candidates;
+}
+
+// One model of the scene with its rows of the composed order [offset,
+// offset + count), its basis weights (dynamics: k per row) and optimiser.
+struct ModelRows {
+  GaussianModel* model;
+  std::vector<float>* logits;  // null for the statics
+  int k;
+  Adam* adam;
+  std::size_t offset, count;
+};
+
+// The candidates of `m` no larger than `dense` cloned as they are, the
+// larger ones split into kSplitSamples samples drawn from them with their
+// scales shrunk; returns the rows split (whose originals go) and adds the
+// rows appended to `added`.
+std::vector<std::uint32_t> CloneAndSplit(
+    const std::vector<Candidate>& candidates, double dense, const ModelRows& m,
+    std::normal_distribution<float>* normal, std::mt19937_64* rng,
+    std::int64_t* added) {
+  GaussianModel* model = m.model;
+  std::vector<std::uint32_t> clone, split;
+  for (const Candidate& c : candidates) {
+    if (c.row < m.offset || c.row >= m.offset + m.count) continue;
+    const std::uint32_t r = c.row - static_cast<std::uint32_t>(m.offset);
+    (LargestScale(*model, r) > dense ? split : clone).push_back(r);
+  }
+  // Clones: exact copies (their gradients will differ from the next step).
+  AppendGaussianRows(*model, clone, model);
+  if (m.logits) AppendRows(clone, m.k, m.logits);
+  std::vector<std::uint32_t> split_rows;
+  for (std::uint32_t r : split)
+    for (int j = 0; j < kSplitSamples; ++j) split_rows.push_back(r);
+  const std::size_t first_split = model->size();
+  AppendGaussianRows(*model, split_rows, model);
+  if (m.logits) AppendRows(split_rows, m.k, m.logits);
+  for (std::size_t j = 0; j < split_rows.size(); ++j) {
+    const std::size_t row = first_split + j;
+    float* mean = &model->means[row * 3];
+    float* ls = &model->log_scales[row * 3];
+    const float* q = &model->quats[row * 4];
+    Eigen::Quaternionf rot(q[0], q[1], q[2], q[3]);
+    if (rot.norm() < kMinQuaternionNorm) rot = Eigen::Quaternionf::Identity();
+    rot.normalize();
+    Eigen::Vector3f local;
+    for (int c = 0; c < 3; ++c) local[c] = std::exp(ls[c]) * (*normal)(*rng);
+    const Eigen::Vector3f offset_world = rot * local;
+    for (int c = 0; c < 3; ++c) {
+      mean[c] += offset_world[c];
+      ls[c] -= std::log(kSplitScaleDivisor);
+    }
+  }
+  m.adam->AppendRows(
+      static_cast<std::int64_t>(clone.size() + split_rows.size()));
+  *added += static_cast<std::int64_t>(clone.size() + split_rows.size());
+  return split;
+}
+
+// Removes the split originals, the faint Gaussians and, after the first
+// opacity reset, those too wide in the world or on screen; returns the count
+// removed besides the split originals.
+std::int64_t Prune(const ModelRows& m, const std::vector<std::uint32_t>& split,
+                   const DensifyStatistics& stats,
+                   const StrategyOptions& options, double extent) {
+  GaussianModel* model = m.model;
+  // Large Gaussians are pruned only after the first opacity reset (3DGS).
+  const bool prune_large = stats.reset_done;
+  std::vector<std::uint8_t> keep(model->size(), 1);
+  for (std::uint32_t r : split) keep[r] = 0;
+  for (std::size_t i = 0; i < model->size(); ++i) {
+    if (Sigmoid(model->opacities[i]) < options.prune_opacity) keep[i] = 0;
+    if (prune_large) {
+      const bool too_wide =
+          LargestScale(*model, i) > kMaxWorldScaleFraction * extent;
+      const bool too_big_on_screen =
+          i < m.count &&
+          stats.max_radius[m.offset + i] > options.max_screen_radius;
+      if (too_wide || too_big_on_screen) keep[i] = 0;
+    }
+  }
+  const std::size_t before = model->size();
+  KeepGaussianRows(keep, model);
+  if (m.logits) KeepRows(keep, m.k, m.logits);
+  m.adam->KeepRows(keep);
+  return static_cast<std::int64_t>(before - model->size()) -
+         static_cast<std::int64_t>(split.size());
+}
+
 }  // namespace
 
 void DensifyStatistics::Assign(std::size_t n) {
@@ -79,106 +199,25 @@ void DefaultStrategy::StepPostOptimise(std::int64_t iteration,
 
 void DefaultStrategy::Densify(OptimisedScene optimised, std::mt19937_64* rng) {
   GaussianScene& scene = *optimised.scene;
-  // Large Gaussians are pruned only after the first opacity reset (3DGS).
-  const bool prune_large = stats_.reset_done;
-  const std::size_t ns = scene.statics.size();
-  const double threshold = options_.densify_gradient;
+  const std::size_t ns = scene.statics.size(), nd = scene.dynamics.size();
+  const std::vector<Candidate> candidates = DensifyCandidates(
+      stats_, options_.densify_gradient,
+      std::max<std::int64_t>(
+          0, options_.max_gaussians - static_cast<std::int64_t>(scene.size())));
   const double dense = options_.percent_dense * extent_;
+  // One distribution for both models: it keeps the second of each pair of
+  // samples it draws.
   std::normal_distribution<float> normal;
-
-  struct Candidate {
-    float gradient;
-    std::uint32_t row;  // in the composed order
-  };
-  std::vector<Candidate> candidates;
-  for (std::size_t i = 0; i < stats_.gradient.size(); ++i) {
-    if (stats_.count[i] == 0) continue;
-    const float g = stats_.gradient[i] / stats_.count[i];
-    if (g >= threshold)
-      candidates.push_back({g, static_cast<std::uint32_t>(i)});
-  }
-  // At the cap, the largest gradients go first.
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) {
-                     return a.gradient > b.gradient;
-                   });
-  const std::int64_t budget = std::max<std::int64_t>(
-      0, options_.max_gaussians - static_cast<std::int64_t>(scene.size()));
-  if (static_cast<std::int64_t>(candidates.size()) > budget)
-    candidates.resize(budget);
-  std::sort(
-      candidates.begin(), candidates.end(),
-      [](const Candidate& a, const Candidate& b) { return a.row < b.row; });
-
   std::int64_t added = 0, removed = 0;
-  const auto process = [&](GaussianModel* model, std::vector<float>* logits,
-                           int k, Adam* adam, std::size_t offset,
-                           std::size_t count) {
-    if (count == 0) return;
-    std::vector<std::uint32_t> clone, split;
-    for (const Candidate& c : candidates) {
-      if (c.row < offset || c.row >= offset + count) continue;
-      const std::uint32_t r = c.row - static_cast<std::uint32_t>(offset);
-      const float* s = &model->log_scales[r * 3];
-      const float largest = std::exp(std::max({s[0], s[1], s[2]}));
-      (largest > dense ? split : clone).push_back(r);
-    }
-    // Clones: exact copies (their gradients will differ from the next step).
-    AppendGaussianRows(*model, clone, model);
-    if (logits) AppendRows(clone, k, logits);
-    // Splits: kSplitSamples samples drawn from the Gaussian, scales shrunk.
-    std::vector<std::uint32_t> split_rows;
-    for (std::uint32_t r : split)
-      for (int j = 0; j < kSplitSamples; ++j) split_rows.push_back(r);
-    const std::size_t first_split = model->size();
-    AppendGaussianRows(*model, split_rows, model);
-    if (logits) AppendRows(split_rows, k, logits);
-    for (std::size_t j = 0; j < split_rows.size(); ++j) {
-      const std::size_t row = first_split + j;
-      float* mean = &model->means[row * 3];
-      float* ls = &model->log_scales[row * 3];
-      const float* q = &model->quats[row * 4];
-      Eigen::Quaternionf rot(q[0], q[1], q[2], q[3]);
-      if (rot.norm() < kMinQuaternionNorm) rot = Eigen::Quaternionf::Identity();
-      rot.normalize();
-      Eigen::Vector3f local;
-      for (int c = 0; c < 3; ++c) local[c] = std::exp(ls[c]) * normal(*rng);
-      const Eigen::Vector3f offset_world = rot * local;
-      for (int c = 0; c < 3; ++c) {
-        mean[c] += offset_world[c];
-        ls[c] -= std::log(kSplitScaleDivisor);
-      }
-    }
-    adam->AppendRows(
-        static_cast<std::int64_t>(clone.size() + split_rows.size()));
-    added += static_cast<std::int64_t>(clone.size() + split_rows.size());
-
-    // Remove split originals and pruned Gaussians.
-    std::vector<std::uint8_t> keep(model->size(), 1);
-    for (std::uint32_t r : split) keep[r] = 0;
-    for (std::size_t i = 0; i < model->size(); ++i) {
-      if (Sigmoid(model->opacities[i]) < options_.prune_opacity) keep[i] = 0;
-      if (prune_large) {
-        const float* s = &model->log_scales[i * 3];
-        const float largest = std::exp(std::max({s[0], s[1], s[2]}));
-        const bool too_wide = largest > kMaxWorldScaleFraction * extent_;
-        const bool too_big_on_screen =
-            i < count &&
-            stats_.max_radius[offset + i] > options_.max_screen_radius;
-        if (too_wide || too_big_on_screen) keep[i] = 0;
-      }
-    }
-    const std::size_t before = model->size();
-    KeepGaussianRows(keep, model);
-    if (logits) KeepRows(keep, k, logits);
-    adam->KeepRows(keep);
-    removed += static_cast<std::int64_t>(before - model->size()) -
-               static_cast<std::int64_t>(split.size());
-  };
-  const std::size_t nd = scene.dynamics.size();
-  process(&scene.statics, nullptr, 0, optimised.statics, 0, ns);
-  process(&scene.dynamics, &scene.logits, scene.bases.num_bases,
-          optimised.dynamics, ns, nd);
+  for (const ModelRows& m :
+       {ModelRows{&scene.statics, nullptr, 0, optimised.statics, 0, ns},
+        ModelRows{&scene.dynamics, &scene.logits, scene.bases.num_bases,
+                  optimised.dynamics, ns, nd}}) {
+    if (m.count == 0) continue;
+    const std::vector<std::uint32_t> split =
+        CloneAndSplit(candidates, dense, m, &normal, rng, &added);
+    removed += Prune(m, split, stats_, options_, extent_);
+  }
   densified_total_ += added;
   pruned_total_ += removed;
   stats_.Assign(scene.size());

@@ -111,6 +111,63 @@ PhaseTimes FitStepPhases(const GaussianScene& scene,
   return t;
 }
 
+// Medians over runs of rendering a scene, forward and backward, with the
+// rasterizer's phases and per-run means of its counts.
+struct RenderTimes {
+  double compose = 0, forward = 0, backward = 0;
+  double project = 0, bin = 0, blend = 0, blend_backward = 0,
+         project_backward = 0;
+  std::uint64_t visible = 0, evaluations = 0, entries = 0;  // summed
+};
+
+// `repeats` runs, run r at camera r mod cameras and its time.
+RenderTimes TimeRenders(const GaussianScene& scene,
+                        const std::vector<RasterCamera>& cameras,
+                        const std::vector<int>& times, int repeats) {
+  GaussianModel model;
+  Rasterizer rasterizer;
+  RasterState state;
+  RenderOutput out;
+  scene.ComposeAt(times[0], &model);
+  rasterizer.Forward(model, cameras[0], {}, &out, &state);  // warm-up
+  std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
+      blend_ms, blend_backward_ms, project_backward_ms;
+  RenderTimes t;
+  GaussianGradients grad;
+  RenderGradients d_out;
+  for (int r = 0; r < repeats; ++r) {
+    const std::size_t v = static_cast<std::size_t>(r) % cameras.size();
+    Timer compose;
+    scene.ComposeAt(times[v], &model);
+    compose_ms.push_back(1e3 * compose.WallSeconds());
+    Timer forward;
+    rasterizer.Forward(model, cameras[v], {}, &out, &state);
+    forward_ms.push_back(1e3 * forward.WallSeconds());
+    project_ms.push_back(state.stats.project_ms);
+    bin_ms.push_back(state.stats.bin_ms);
+    blend_ms.push_back(state.stats.blend_ms);
+    t.visible += state.stats.visible;
+    t.evaluations += state.stats.pixel_evaluations;
+    t.entries += state.stats.tile_entries;
+    d_out.rgb.assign(out.rgb.size(), 1e-3f);
+    Timer backward;
+    const RasterBackwardStats backward_stats =
+        rasterizer.Backward(model, cameras[v], {}, state, out, d_out, &grad);
+    backward_ms.push_back(1e3 * backward.WallSeconds());
+    blend_backward_ms.push_back(backward_stats.blend_ms);
+    project_backward_ms.push_back(backward_stats.project_ms);
+  }
+  t.compose = UpperMedian(compose_ms);
+  t.forward = UpperMedian(forward_ms);
+  t.backward = UpperMedian(backward_ms);
+  t.project = UpperMedian(project_ms);
+  t.bin = UpperMedian(bin_ms);
+  t.blend = UpperMedian(blend_ms);
+  t.blend_backward = UpperMedian(blend_backward_ms);
+  t.project_backward = UpperMedian(project_backward_ms);
+  return t;
+}
+
 // The fitted scene of a workspace (`pano4d fit`'s checkpoint) rendered
 // from its training cameras at their times, one camera per run, cycling.
 BenchResult BenchFittedScene(const BenchRenderOptions& options) {
@@ -124,42 +181,10 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
     cameras.push_back(RasterCamera::FromPosed(f.camera));
     times.push_back(f.time);
   }
-  GaussianModel model;
-  Rasterizer rasterizer;
-  RasterState state;
-  RenderOutput out;
-  scene.ComposeAt(times[0], &model);
-  rasterizer.Forward(model, cameras[0], {}, &out, &state);  // warm-up
-  std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
-      blend_ms, blend_backward_ms, project_backward_ms;
-  std::uint64_t visible = 0, evaluations = 0, entries = 0;
-  GaussianGradients grad;
-  RenderGradients d_out;
-  for (int r = 0; r < options.repeats; ++r) {
-    const std::size_t v = static_cast<std::size_t>(r) % cameras.size();
-    Timer compose;
-    scene.ComposeAt(times[v], &model);
-    compose_ms.push_back(1e3 * compose.WallSeconds());
-    Timer forward;
-    rasterizer.Forward(model, cameras[v], {}, &out, &state);
-    forward_ms.push_back(1e3 * forward.WallSeconds());
-    project_ms.push_back(state.stats.project_ms);
-    bin_ms.push_back(state.stats.bin_ms);
-    blend_ms.push_back(state.stats.blend_ms);
-    visible += state.stats.visible;
-    evaluations += state.stats.pixel_evaluations;
-    entries += state.stats.tile_entries;
-    d_out.rgb.assign(out.rgb.size(), 1e-3f);
-    Timer backward;
-    const RasterBackwardStats backward_stats =
-        rasterizer.Backward(model, cameras[v], {}, state, out, d_out, &grad);
-    backward_ms.push_back(1e3 * backward.WallSeconds());
-    blend_backward_ms.push_back(backward_stats.blend_ms);
-    project_backward_ms.push_back(backward_stats.project_ms);
-  }
-  const double f = UpperMedian(forward_ms), b = UpperMedian(backward_ms),
-               c = UpperMedian(compose_ms);
-  const PhaseTimes step = FitStepPhases(scene, frames, options.repeats);
+  const int repeats = options.repeats;
+  const RenderTimes t = TimeRenders(scene, cameras, times, repeats);
+  const double f = t.forward, b = t.backward, c = t.compose;
+  const PhaseTimes step = FitStepPhases(scene, frames, repeats);
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
   result.rows.push_back(
@@ -172,17 +197,17 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
        {"threads", threads},
        {"compose_ms", c},
        {"forward_ms", f},
-       {"project_ms", UpperMedian(project_ms)},
-       {"bin_ms", UpperMedian(bin_ms)},
-       {"blend_ms", UpperMedian(blend_ms)},
-       {"blend_backward_ms", UpperMedian(blend_backward_ms)},
-       {"project_backward_ms", UpperMedian(project_backward_ms)},
+       {"project_ms", t.project},
+       {"bin_ms", t.bin},
+       {"blend_ms", t.blend},
+       {"blend_backward_ms", t.blend_backward},
+       {"project_backward_ms", t.project_backward},
        {"forward_backward_ms", f + b},
        {"fps", 1e3 / f},
-       {"visible", visible / options.repeats},
-       {"tile_entries", entries / options.repeats},
-       {"pixel_evaluations", evaluations / options.repeats},
-       {"pixel_evaluations_per_s", evaluations / (1e-3 * f * options.repeats)},
+       {"visible", t.visible / repeats},
+       {"tile_entries", t.entries / repeats},
+       {"pixel_evaluations", t.evaluations / repeats},
+       {"pixel_evaluations_per_s", t.evaluations / (1e-3 * f * repeats)},
        {"step_ms",
         {{"compose", 1e3 * step.compose},
          {"forward", 1e3 * step.forward},
@@ -196,26 +221,25 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
       "dynamic Gaussians) from its %zu training cameras at their times; "
       "median of %d runs, %d threads\n",
       kVersion, ws.root().c_str(), scene.statics.size(), scene.dynamics.size(),
-      cameras.size(), options.repeats, threads);
+      cameras.size(), repeats, threads);
   result.table +=
       StringPrintf("%10s %10s %11s %12s %8s %18s %14s\n", "gaussians", "size",
                    "compose ms", "forward ms", "fps", "fwd+bwd ms", "visible");
   result.table +=
       StringPrintf("%10zu %6dx%-4d %11.2f %12.2f %8.1f %18.2f %14llu\n",
                    scene.size(), width, height, c, f, 1e3 / f, f + b,
-                   static_cast<unsigned long long>(visible / options.repeats));
+                   static_cast<unsigned long long>(t.visible / repeats));
   result.table += StringPrintf(
       "forward: project %.2f, bin %.2f, blend %.2f ms; backward: blend "
       "%.2f, project %.2f ms (medians)\n",
-      UpperMedian(project_ms), UpperMedian(bin_ms), UpperMedian(blend_ms),
-      UpperMedian(blend_backward_ms), UpperMedian(project_backward_ms));
+      t.project, t.bin, t.blend, t.blend_backward, t.project_backward);
   result.table += StringPrintf(
       "fit step (densification off, mean of %d): %.2f ms: compose %.2f, "
       "forward %.2f, losses %.2f, backward %.2f, motion %.2f, optimiser "
       "%.2f ms\n",
-      options.repeats, 1e3 * StepSeconds(step), 1e3 * step.compose,
-      1e3 * step.forward, 1e3 * step.loss, 1e3 * step.backward,
-      1e3 * step.motion, 1e3 * step.optimise);
+      repeats, 1e3 * StepSeconds(step), 1e3 * step.compose, 1e3 * step.forward,
+      1e3 * step.loss, 1e3 * step.backward, 1e3 * step.motion,
+      1e3 * step.optimise);
   return result;
 }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <random>
 #include <string>
 
@@ -56,6 +55,56 @@ nlohmann::json PairsReport::ToJson() const {
           {"mask_fraction", mask_fraction}};
 }
 
+namespace {
+
+// The panorama frame of the training views' depth (every kCentroidStride-th
+// pixel), as the expansion makes it.
+PanoramaFrame FrameOfViews(const std::vector<const TrainingView*>& views) {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<RasterCamera> cameras;
+  for (const TrainingView* v : views) {
+    if (v->depth.empty()) {
+      throw Error(v->name, "depth", "",
+                  "no depth for this frame: run `pano4d depth` first");
+    }
+    cameras.push_back(v->camera);
+    const RasterCamera& c = v->camera;
+    for (int y = 0; y < c.height; y += kCentroidStride)
+      for (int x = 0; x < c.width; x += kCentroidStride) {
+        const float z = v->depth[static_cast<std::size_t>(y) * c.width + x];
+        if (!(z > 0)) continue;
+        points.push_back(c.Unproject(x + 0.5f, y + 0.5f, z));
+      }
+  }
+  return MakePanoramaFrame(points, cameras);
+}
+
+// One frame of a clip: the source warped to the orbit camera and back
+// (cov), what the round trip lost (mask) and the source (src); returns its
+// meta.json entry and adds the mask's share to `mask_sum`.
+nlohmann::json WritePairFrame(const TrainingView& v, const RasterCamera& target,
+                              double angle, const std::filesystem::path& clip,
+                              int i, double* mask_sum) {
+  const WarpResult there = ForwardWarp(AsMat(v), DepthMat(v), v.camera, target);
+  const cv::Mat known = there.mask == 0;
+  const WarpResult back =
+      ForwardWarp(there.rgb, there.depth, target, v.camera, known);
+  WriteImage(clip / "cov" / (ZeroPadded(i, 5) + ".png"),
+             Image::FromRgb32f(back.rgb.clone()));
+  WriteMask(clip / "mask" / (ZeroPadded(i, 5) + ".png"), back.mask);
+  WriteImage(clip / "src" / (ZeroPadded(i, 5) + ".png"),
+             Image::FromRgb32f(AsMat(v).clone()));
+  *mask_sum +=
+      static_cast<double>(cv::countNonZero(back.mask)) / back.mask.total();
+  return {{"source", v.name},
+          {"time", v.time},
+          {"angle_degrees", angle / kDegrees},
+          {"target_camera", CameraToJson(target)},
+          {"source_camera", CameraToJson(v.camera)}};
+}
+
+}  // namespace
+
 PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
                               const PairOptions& o,
                               const std::filesystem::path& out) {
@@ -63,35 +112,15 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
   if (given.empty()) {
     throw Error("make-pairs", "views", "0", "no training frames");
   }
-  // In time order, stably. An order of indices, not of the views: GCC 12's
+  // In time order, stably. An order of pointers, not of the views: GCC 12's
   // std::stable_sort buffer ignores the over-alignment of Eigen members.
-  std::vector<std::size_t> order(given.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) {
-                     return given[a].time < given[b].time;
+  std::vector<const TrainingView*> views;
+  for (const TrainingView& v : given) views.push_back(&v);
+  std::stable_sort(views.begin(), views.end(),
+                   [](const TrainingView* a, const TrainingView* b) {
+                     return a->time < b->time;
                    });
-  const auto views = [&](std::size_t i) -> const TrainingView& {
-    return given[order[i]];
-  };
-  std::vector<Eigen::Vector3f> points;
-  std::vector<RasterCamera> cameras;
-  for (std::size_t i = 0; i < given.size(); ++i) {
-    const TrainingView& v = views(i);
-    if (v.depth.empty()) {
-      throw Error(v.name, "depth", "",
-                  "no depth for this frame: run `pano4d depth` first");
-    }
-    cameras.push_back(v.camera);
-    const RasterCamera& c = v.camera;
-    for (int y = 0; y < c.height; y += kCentroidStride)
-      for (int x = 0; x < c.width; x += kCentroidStride) {
-        const float z = v.depth[static_cast<std::size_t>(y) * c.width + x];
-        if (!(z > 0)) continue;
-        points.push_back(c.Unproject(x + 0.5f, y + 0.5f, z));
-      }
-  }
-  const PanoramaFrame frame = MakePanoramaFrame(points, cameras);
+  const PanoramaFrame frame = FrameOfViews(views);
   const int count = std::min<int>(o.frames, static_cast<int>(given.size()));
   std::mt19937_64 rng(o.seed);
   PairsReport report;
@@ -104,7 +133,7 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
         std::uniform_real_distribution<double>(0, 2 * M_PI)(rng);
     const int first = std::uniform_int_distribution<int>(
         0, static_cast<int>(given.size()) - count)(rng);
-    const RasterCamera& reference = views(first).camera;
+    const RasterCamera& reference = views[first]->camera;
     const Eigen::Vector3d n = ViewingDirection(reference);
     const Eigen::Vector3d right =
         reference.rotation.row(0).transpose().cast<double>();
@@ -116,27 +145,11 @@ PairsReport MakeTrainingPairs(const std::vector<TrainingView>& given,
     const std::filesystem::path clip = out / ("clip_" + ZeroPadded(k, 5));
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < count; ++i) {
-      const TrainingView& v = views(first + i);
+      const TrainingView& v = *views[first + i];
       const double angle = o.elevation_degrees * kDegrees * i / (count - 1);
-      const RasterCamera target =
-          OrbitCamera(v.camera, frame.center, axis, angle);
-      const WarpResult there =
-          ForwardWarp(AsMat(v), DepthMat(v), v.camera, target);
-      const cv::Mat known = there.mask == 0;
-      const WarpResult back =
-          ForwardWarp(there.rgb, there.depth, target, v.camera, known);
-      WriteImage(clip / "cov" / (ZeroPadded(i, 5) + ".png"),
-                 Image::FromRgb32f(back.rgb.clone()));
-      WriteMask(clip / "mask" / (ZeroPadded(i, 5) + ".png"), back.mask);
-      WriteImage(clip / "src" / (ZeroPadded(i, 5) + ".png"),
-                 Image::FromRgb32f(AsMat(v).clone()));
-      mask_sum +=
-          static_cast<double>(cv::countNonZero(back.mask)) / back.mask.total();
-      frames.push_back({{"source", v.name},
-                        {"time", v.time},
-                        {"angle_degrees", angle / kDegrees},
-                        {"target_camera", CameraToJson(target)},
-                        {"source_camera", CameraToJson(v.camera)}});
+      frames.push_back(
+          WritePairFrame(v, OrbitCamera(v.camera, frame.center, axis, angle),
+                         angle, clip, i, &mask_sum));
       bar.Add();
     }
     WriteJson(clip / "meta.json",

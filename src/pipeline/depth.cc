@@ -277,6 +277,35 @@ void AlignExternalDepth(const Workspace& ws, const DepthOptions& o,
   }
 }
 
+// Each training frame grey at the working size (its longer side at most
+// `long_side`), with its camera rescaled, and its dynamic mask if any.
+std::vector<StereoView> StereoViews(const WorkspaceFrames& frames,
+                                    int long_side,
+                                    std::vector<cv::Mat>* dynamic) {
+  const std::size_t n = frames.train.size();
+  std::vector<StereoView> views(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const WorkspaceFrame& f = frames.train[i];
+    const Image image = ReadImage(f.rgb);
+    const int w = f.camera.camera.width, h = f.camera.camera.height;
+    CheckSize(image.mat(), f.rgb, f.camera.camera);
+    const double s = std::min(1.0, double(long_side) / std::max(w, h));
+    const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
+    const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
+    cv::Mat grey, small;
+    cv::cvtColor(image.mat(), grey, cv::COLOR_RGB2GRAY);
+    cv::resize(grey, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+    views[i].grey = small;
+    views[i].camera = f.camera;
+    views[i].camera.camera = f.camera.camera.Rescaled(sw, sh);
+    if (!f.dynamic_mask.empty()) {
+      (*dynamic)[i] = ReadMask(f.dynamic_mask);
+      CheckSize((*dynamic)[i], f.dynamic_mask, f.camera.camera);
+    }
+  }
+  return views;
+}
+
 // Plane-sweep stereo depth for every training frame, on the poses of the
 // COLMAP model (a dataset's own cameras when `pano4d sfm --dataset` made
 // it; DESIGN.md "depth"): neighbours among the other training frames chosen by
@@ -308,28 +337,9 @@ void StereoDepth(const Workspace& ws, const DepthOptions& o,
   for (StereoRange& r : ranges)
     if (!(r.median > 0)) r = *scene;
 
-  // Grey frames at the working size.
-  std::vector<StereoView> views(n);
   std::vector<cv::Mat> dynamic(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const WorkspaceFrame& f = frames->train[i];
-    const Image image = ReadImage(f.rgb);
-    const int w = f.camera.camera.width, h = f.camera.camera.height;
-    CheckSize(image.mat(), f.rgb, f.camera.camera);
-    const double s = std::min(1.0, double(o.stereo_long_side) / std::max(w, h));
-    const int sw = std::max(1, static_cast<int>(std::lround(w * s)));
-    const int sh = std::max(1, static_cast<int>(std::lround(h * s)));
-    cv::Mat grey, small;
-    cv::cvtColor(image.mat(), grey, cv::COLOR_RGB2GRAY);
-    cv::resize(grey, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
-    views[i].grey = small;
-    views[i].camera = f.camera;
-    views[i].camera.camera = f.camera.camera.Rescaled(sw, sh);
-    if (!f.dynamic_mask.empty()) {
-      dynamic[i] = ReadMask(f.dynamic_mask);
-      CheckSize(dynamic[i], f.dynamic_mask, f.camera.camera);
-    }
-  }
+  const std::vector<StereoView> views =
+      StereoViews(*frames, o.stereo_long_side, &dynamic);
 
   nlohmann::json report = nlohmann::json::array();
   ProgressBar bar("stereo", static_cast<std::int64_t>(n));
