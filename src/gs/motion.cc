@@ -145,6 +145,81 @@ void PoseDynamicGaussians(const GaussianModelT<T>& canonical,
   }
 }
 
+namespace {
+
+// dL/dq_b, the blended (unnormalised) rotation's gradient, from the posed
+// mean's gradient g and the posed rotation's gq: mu(t) = M(q_b) mu_c / s +
+// t_b and q(t) = q_b (x) q_c. Zero for the identity blend.
+template <typename T>
+Quat<T> BlendedRotationGradient(const Blend<T>& b, const Vec3<T>& mu,
+                                const Quat<T>& qc, const Vec3<T>& g,
+                                const Quat<T>& gq) {
+  Quat<T> gqb{};
+  if (b.identity) return gqb;
+  const T s = b.norm2;
+  // d/dq_b of M(q_b) mu_c / s: (dM/dq_j mu_c - 2 q_j v) / s, v = M mu/s.
+  const T qw = b.q[0], qx = b.q[1], qy = b.q[2], qz = b.q[3];
+  const T px = mu[0], py = mu[1], pz = mu[2];
+  const Vec3<T> mv = RotateUnnormalised(b.q, mu);
+  const Vec3<T> v = {mv[0] / s, mv[1] / s, mv[2] / s};
+  const std::array<Vec3<T>, 4> dm = {
+      Vec3<T>{2 * (qw * px - qz * py + qy * pz),
+              2 * (qz * px + qw * py - qx * pz),
+              2 * (-qy * px + qx * py + qw * pz)},
+      Vec3<T>{2 * (qx * px + qy * py + qz * pz),
+              2 * (qy * px - qx * py - qw * pz),
+              2 * (qz * px + qw * py - qx * pz)},
+      Vec3<T>{2 * (-qy * px + qx * py + qw * pz),
+              2 * (qx * px + qy * py + qz * pz),
+              2 * (-qw * px + qz * py - qy * pz)},
+      Vec3<T>{2 * (-qz * px - qw * py + qx * pz),
+              2 * (qw * px - qz * py + qy * pz),
+              2 * (qx * px + qy * py + qz * pz)}};
+  for (int j = 0; j < 4; ++j) {
+    T dot = 0;
+    for (int c = 0; c < 3; ++c) dot += g[c] * (dm[j][c] - 2 * b.q[j] * v[c]);
+    gqb[j] = dot / s;
+  }
+  // q(t) = q_b (x) q_c: d/dq_b.
+  gqb[0] += gq[0] * qc[0] + gq[1] * qc[1] + gq[2] * qc[2] + gq[3] * qc[3];
+  gqb[1] += -gq[0] * qc[1] + gq[1] * qc[0] - gq[2] * qc[3] + gq[3] * qc[2];
+  gqb[2] += -gq[0] * qc[2] + gq[1] * qc[3] + gq[2] * qc[0] - gq[3] * qc[1];
+  gqb[3] += -gq[0] * qc[3] - gq[1] * qc[2] + gq[2] * qc[1] + gq[3] * qc[0];
+  return gqb;
+}
+
+// q(t) = q_b (x) q_c: d/dq_c, added to dqc[4].
+template <typename T>
+void AddCanonicalRotationGradient(const Quat<T>& a, const Quat<T>& gq, T* dqc) {
+  dqc[0] += gq[0] * a[0] + gq[1] * a[1] + gq[2] * a[2] + gq[3] * a[3];
+  dqc[1] += -gq[0] * a[1] + gq[1] * a[0] + gq[2] * a[3] - gq[3] * a[2];
+  dqc[2] += -gq[0] * a[2] - gq[1] * a[3] + gq[2] * a[0] + gq[3] * a[1];
+  dqc[3] += -gq[0] * a[3] + gq[1] * a[2] - gq[2] * a[1] + gq[3] * a[0];
+}
+
+// q_b = sum w_k q_k, t_b = sum w_k tau_k: each basis's gradient at `time`
+// added to acc (K x 7), and dL/dw_k into dw.
+template <typename T>
+void AddBasisGradients(const MotionBasesT<T>& bases, int time, const T* w,
+                       const Quat<T>& gqb, const Vec3<T>& g, T* acc, T* dw) {
+  for (int kk = 0; kk < bases.num_bases; ++kk) {
+    const T* r = bases.rotation(kk, time);
+    const T* tr = bases.translation(kk, time);
+    T* acc_k = acc + kk * 7;
+    dw[kk] = 0;
+    for (int j = 0; j < 4; ++j) {
+      acc_k[j] += w[kk] * gqb[j];
+      dw[kk] += r[j] * gqb[j];
+    }
+    for (int j = 0; j < 3; ++j) {
+      acc_k[4 + j] += w[kk] * g[j];
+      dw[kk] += tr[j] * g[j];
+    }
+  }
+}
+
+}  // namespace
+
 template <typename T>
 void PoseDynamicGaussiansBackward(
     const GaussianModelT<T>& canonical, const std::vector<T>& logits,
@@ -196,65 +271,9 @@ void PoseDynamicGaussiansBackward(
         const Vec3<T> gmu = RotateTransposedUnnormalised(b.q, g);
         for (int j = 0; j < 3; ++j) (*d_means)[i * 3 + j] += gmu[j] / s;
 
-        // d/dq_b of M(q_b) mu_c / s: (dM/dq_j mu_c - 2 q_j v) / s, v = M mu/s.
-        Quat<T> gqb{};
-        if (!b.identity) {
-          const T qw = b.q[0], qx = b.q[1], qy = b.q[2], qz = b.q[3];
-          const T px = mu[0], py = mu[1], pz = mu[2];
-          const Vec3<T> mv = RotateUnnormalised(b.q, mu);
-          const Vec3<T> v = {mv[0] / s, mv[1] / s, mv[2] / s};
-          const std::array<Vec3<T>, 4> dm = {
-              Vec3<T>{2 * (qw * px - qz * py + qy * pz),
-                      2 * (qz * px + qw * py - qx * pz),
-                      2 * (-qy * px + qx * py + qw * pz)},
-              Vec3<T>{2 * (qx * px + qy * py + qz * pz),
-                      2 * (qy * px - qx * py - qw * pz),
-                      2 * (qz * px + qw * py - qx * pz)},
-              Vec3<T>{2 * (-qy * px + qx * py + qw * pz),
-                      2 * (qx * px + qy * py + qz * pz),
-                      2 * (-qw * px + qz * py - qy * pz)},
-              Vec3<T>{2 * (-qz * px - qw * py + qx * pz),
-                      2 * (qw * px - qz * py + qy * pz),
-                      2 * (qx * px + qy * py + qz * pz)}};
-          for (int j = 0; j < 4; ++j) {
-            T dot = 0;
-            for (int c = 0; c < 3; ++c)
-              dot += g[c] * (dm[j][c] - 2 * b.q[j] * v[c]);
-            gqb[j] = dot / s;
-          }
-          // q(t) = q_b (x) q_c: d/dq_b.
-          gqb[0] +=
-              gq[0] * qc[0] + gq[1] * qc[1] + gq[2] * qc[2] + gq[3] * qc[3];
-          gqb[1] +=
-              -gq[0] * qc[1] + gq[1] * qc[0] - gq[2] * qc[3] + gq[3] * qc[2];
-          gqb[2] +=
-              -gq[0] * qc[2] + gq[1] * qc[3] + gq[2] * qc[0] - gq[3] * qc[1];
-          gqb[3] +=
-              -gq[0] * qc[3] - gq[1] * qc[2] + gq[2] * qc[1] + gq[3] * qc[0];
-        }
-        // q(t) = q_b (x) q_c: d/dq_c.
-        const Quat<T>& a = b.q;
-        T* dqc = &(*d_quats)[i * 4];
-        dqc[0] += gq[0] * a[0] + gq[1] * a[1] + gq[2] * a[2] + gq[3] * a[3];
-        dqc[1] += -gq[0] * a[1] + gq[1] * a[0] + gq[2] * a[3] - gq[3] * a[2];
-        dqc[2] += -gq[0] * a[2] - gq[1] * a[3] + gq[2] * a[0] + gq[3] * a[1];
-        dqc[3] += -gq[0] * a[3] + gq[1] * a[2] - gq[2] * a[1] + gq[3] * a[0];
-
-        // q_b = sum w_k q_k, t_b = sum w_k tau_k.
-        for (int kk = 0; kk < k; ++kk) {
-          const T* r = bases.rotation(kk, time);
-          const T* tr = bases.translation(kk, time);
-          T* acc_k = acc + kk * 7;
-          dw[kk] = 0;
-          for (int j = 0; j < 4; ++j) {
-            acc_k[j] += w[kk] * gqb[j];
-            dw[kk] += r[j] * gqb[j];
-          }
-          for (int j = 0; j < 3; ++j) {
-            acc_k[4 + j] += w[kk] * g[j];
-            dw[kk] += tr[j] * g[j];
-          }
-        }
+        const Quat<T> gqb = BlendedRotationGradient(b, mu, qc, g, gq);
+        AddCanonicalRotationGradient(b.q, gq, &(*d_quats)[i * 4]);
+        AddBasisGradients(bases, time, w.data(), gqb, g, acc, dw.data());
         // Softmax: d logit_j = w_j (dw_j - sum_k w_k dw_k).
         T mean = 0;
         for (int kk = 0; kk < k; ++kk) mean += w[kk] * dw[kk];

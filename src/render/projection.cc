@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -51,96 +52,122 @@ void GaussianGradientsT<T>::Assign(const GaussianModelT<T>& model) {
   means2d.assign(2 * model.size(), T(0));
 }
 
+namespace {
+
+// Where a projected Gaussian's alpha >= kMinAlpha box lies: its half-sizes,
+// its 3-sigma radius, and the tiles it touches, [x0, x1) x [y0, y1).
+template <typename T>
+struct Footprint {
+  T extent_x, extent_y, radius;
+  int x0, x1, y0, y1;
+};
+
+// alpha >= kMinAlpha <=> d^T conic d <= 2 ln(opacity / kMinAlpha): the
+// bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
+// cov_yy) (the footprint the opacity allows: a faint Gaussian's is smaller
+// than 3 sigma, an opaque one's up to 3.3 sigma), bounded along each axis
+// rather than by the square of the largest axis. nullopt when a value is
+// not finite or no tile is touched.
+template <typename T>
+std::optional<Footprint<T>> FootprintOf(const Eigen::Matrix<T, 2, 2>& cov,
+                                        T det, T opacity, T px, T py,
+                                        int tiles_x, int tiles_y) {
+  Footprint<T> f;
+  const T k = T(2.0) * std::log(opacity / T(kMinAlpha));
+  // Clamped as the radius is, so that tile arithmetic stays in range.
+  f.extent_x =
+      std::min(T(kMaxRadius), std::sqrt(k * cov(0, 0)) + T(kAlphaBoxMargin));
+  f.extent_y =
+      std::min(T(kMaxRadius), std::sqrt(k * cov(1, 1)) + T(kAlphaBoxMargin));
+  const T mid = T(0.5) * (cov(0, 0) + cov(1, 1));
+  const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
+  f.radius = std::min(T(kMaxRadius), std::ceil(T(3.0) * std::sqrt(lambda)));
+  if (!std::isfinite(f.radius) || !std::isfinite(f.extent_x) ||
+      !std::isfinite(f.extent_y) || !std::isfinite(px) || !std::isfinite(py))
+    return std::nullopt;
+  const auto tile = [](T v, int tiles) {
+    return static_cast<int>(
+        std::clamp(v / kTileSize, T(0.0), static_cast<T>(tiles)));
+  };
+  f.x0 = tile(px - f.extent_x, tiles_x);
+  f.x1 = tile(px + f.extent_x + kTileSize - 1, tiles_x);
+  f.y0 = tile(py - f.extent_y, tiles_y);
+  f.y1 = tile(py + f.extent_y + kTileSize - 1, tiles_y);
+  if (f.x1 <= f.x0 || f.y1 <= f.y0) return std::nullopt;
+  return f;
+}
+
+// Gaussian i projected into `p`; radius 0 where it is behind the near
+// plane, degenerate, below kMinAlpha everywhere or outside the image.
+template <typename T>
+void ProjectGaussian(const GaussianModelT<T>& model,
+                     const RasterCameraT<T>& camera, const FovLimits<T>& lim,
+                     const Eigen::Matrix<T, 3, 1>& center, int tiles_x,
+                     int tiles_y, std::ptrdiff_t i,
+                     ProjectedGaussiansT<T>* pp) {
+  using Vec3 = Eigen::Matrix<T, 3, 1>;
+  ProjectedGaussiansT<T>& p = *pp;
+  p.radius[i] = 0;
+  const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
+                  model.means[3 * i + 2]);
+  const Vec3 t = camera.rotation * mean + camera.translation;
+  if (!(t.z() > T(kNearPlane)) || !t.allFinite()) return;
+  const Covariance3dT<T> cov3d(UnitQuaternion<T>(&model.quats[4 * i]),
+                               &model.log_scales[3 * i]);
+  const PerspectiveJacobianT<T> jac(t, camera, lim);
+  const Eigen::Matrix<T, 2, 2> cov =
+      ProjectCovariance<T>(jac.j * camera.rotation, cov3d.sigma);
+  const T det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
+  if (!(det > 0) || !std::isfinite(det)) return;
+  // A Gaussian below kMinAlpha everywhere never contributes.
+  const T opacity = Sigmoid(model.opacities[i]);
+  if (!(opacity >= T(kMinAlpha))) return;
+  const Eigen::Matrix<T, 2, 1> pixel = ProjectPoint(t, camera, jac.inv_z);
+  const std::optional<Footprint<T>> f =
+      FootprintOf(cov, det, opacity, pixel.x(), pixel.y(), tiles_x, tiles_y);
+  if (!f) return;
+  p.x[i] = pixel.x();
+  p.y[i] = pixel.y();
+  p.depth[i] = t.z();
+  const Eigen::Matrix<T, 3, 1> conic = InverseCovariance(cov, det);
+  p.conic_a[i] = conic(0);
+  p.conic_b[i] = conic(1);
+  p.conic_c[i] = conic(2);
+  p.opacity[i] = opacity;
+  p.extent_x[i] = f->extent_x;
+  p.extent_y[i] = f->extent_y;
+  bool clamped[3];
+  const int k_count = model.sh_coefficients();
+  const Vec3 color =
+      ShColor(model.sh_degree,
+              model.sh.data() + static_cast<std::size_t>(i) * k_count * 3,
+              (mean - center).normalized(), clamped);
+  p.r[i] = color.x();
+  p.g[i] = color.y();
+  p.b[i] = color.z();
+  for (int c = 0; c < 3; ++c) p.clamped[3 * i + c] = clamped[c];
+  p.tile_x0[i] = f->x0;
+  p.tile_x1[i] = f->x1;
+  p.tile_y0[i] = f->y0;
+  p.tile_y1[i] = f->y1;
+  p.radius[i] = static_cast<int>(f->radius);
+}
+
+}  // namespace
+
 template <typename T>
 void ProjectionForward(const GaussianModelT<T>& model,
                        const RasterCameraT<T>& camera,
                        ProjectedGaussiansT<T>* projected) {
-  using Vec3 = Eigen::Matrix<T, 3, 1>;
   const std::size_t n = model.size();
-  ProjectedGaussiansT<T>& p = *projected;
-  p.Resize(n);
+  projected->Resize(n);
   const int tiles_x = (camera.width + kTileSize - 1) / kTileSize;
   const int tiles_y = (camera.height + kTileSize - 1) / kTileSize;
   const FovLimits<T> lim(camera);
-  const Vec3 center = camera.Center();
-  const int k_count = model.sh_coefficients();
-
+  const Eigen::Matrix<T, 3, 1> center = camera.Center();
 #pragma omp parallel for schedule(static)
-  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
-    p.radius[i] = 0;
-    const Vec3 mean(model.means[3 * i], model.means[3 * i + 1],
-                    model.means[3 * i + 2]);
-    const Vec3 t = camera.rotation * mean + camera.translation;
-    if (!(t.z() > T(kNearPlane)) || !t.allFinite()) continue;
-
-    const Covariance3dT<T> cov3d(UnitQuaternion<T>(&model.quats[4 * i]),
-                                 &model.log_scales[3 * i]);
-    const PerspectiveJacobianT<T> jac(t, camera, lim);
-    const Eigen::Matrix<T, 2, 2> cov =
-        ProjectCovariance<T>(jac.j * camera.rotation, cov3d.sigma);
-    const T det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
-    if (!(det > 0) || !std::isfinite(det)) continue;
-
-    // A Gaussian below kMinAlpha everywhere never contributes.
-    const T opacity = Sigmoid(model.opacities[i]);
-    if (!(opacity >= T(kMinAlpha))) continue;
-    // alpha >= kMinAlpha <=> d^T conic d <= 2 ln(opacity / kMinAlpha):
-    // the bounding box of that ellipse has half-sizes sqrt(k cov_xx), sqrt(k
-    // cov_yy).
-    const T k = T(2.0) * std::log(opacity / T(kMinAlpha));
-    // Clamped as the radius is, so that tile arithmetic stays in range.
-    const T extent_x =
-        std::min(T(kMaxRadius), std::sqrt(k * cov(0, 0)) + T(kAlphaBoxMargin));
-    const T extent_y =
-        std::min(T(kMaxRadius), std::sqrt(k * cov(1, 1)) + T(kAlphaBoxMargin));
-    const T mid = T(0.5) * (cov(0, 0) + cov(1, 1));
-    const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
-    const T radius =
-        std::min(T(kMaxRadius), std::ceil(T(3.0) * std::sqrt(lambda)));
-    const Eigen::Matrix<T, 2, 1> pixel = ProjectPoint(t, camera, jac.inv_z);
-    const T px = pixel.x(), py = pixel.y();
-    if (!std::isfinite(radius) || !std::isfinite(extent_x) ||
-        !std::isfinite(extent_y) || !std::isfinite(px) || !std::isfinite(py))
-      continue;
-    // Tiles touched by the alpha >= kMinAlpha box, [x0, x1): the footprint
-    // the opacity allows (a faint Gaussian's is smaller than 3 sigma, an
-    // opaque one's up to 3.3 sigma), bounded along each axis rather than by
-    // the square of the largest axis.
-    const auto tile = [](T v, int tiles) {
-      return static_cast<int>(
-          std::clamp(v / kTileSize, T(0.0), static_cast<T>(tiles)));
-    };
-    const int x0 = tile(px - extent_x, tiles_x),
-              x1 = tile(px + extent_x + kTileSize - 1, tiles_x);
-    const int y0 = tile(py - extent_y, tiles_y),
-              y1 = tile(py + extent_y + kTileSize - 1, tiles_y);
-    if (x1 <= x0 || y1 <= y0) continue;
-
-    p.x[i] = px;
-    p.y[i] = py;
-    p.depth[i] = t.z();
-    const Eigen::Matrix<T, 3, 1> conic = InverseCovariance(cov, det);
-    p.conic_a[i] = conic(0);
-    p.conic_b[i] = conic(1);
-    p.conic_c[i] = conic(2);
-    p.opacity[i] = opacity;
-    p.extent_x[i] = extent_x;
-    p.extent_y[i] = extent_y;
-    bool clamped[3];
-    const Vec3 color =
-        ShColor(model.sh_degree,
-                model.sh.data() + static_cast<std::size_t>(i) * k_count * 3,
-                (mean - center).normalized(), clamped);
-    p.r[i] = color.x();
-    p.g[i] = color.y();
-    p.b[i] = color.z();
-    for (int c = 0; c < 3; ++c) p.clamped[3 * i + c] = clamped[c];
-    p.tile_x0[i] = x0;
-    p.tile_x1[i] = x1;
-    p.tile_y0[i] = y0;
-    p.tile_y1[i] = y1;
-    p.radius[i] = static_cast<int>(radius);
-  }
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+    ProjectGaussian(model, camera, lim, center, tiles_x, tiles_y, i, projected);
 }
 
 template <typename T>

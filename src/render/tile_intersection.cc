@@ -21,31 +21,22 @@ std::uint32_t DepthBits(T depth) {
   return bits;
 }
 
-}  // namespace
-
-// The visible Gaussians are sorted once by (depth, index) with an LSD radix
-// sort (stable, so equal depths keep index order), then dealt to their
-// tiles in that order: each tile's list comes out sorted by depth without
-// sorting the (Gaussian, tile) pairs themselves.
+// The visible Gaussians in index order with their depth keys into
+// `buffers`, and each Gaussian's first entry (offsets, n + 1 of them: the
+// last is the total). Throws pano4d::Error past 2^32 entries.
 template <typename T>
-void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state) {
-  const ProjectedGaussiansT<T>& p = state->projected;
-  const int width = state->width, height = state->height;
+std::uint32_t ListVisible(const ProjectedGaussiansT<T>& p,
+                          TileSortBuffers* buffers,
+                          std::vector<std::uint32_t>* offsets) {
   const std::size_t n = p.size();
-  const int tiles_x = (width + kTileSize - 1) / kTileSize;
-  const int tiles_y = (height + kTileSize - 1) / kTileSize;
-  const std::size_t tiles = static_cast<std::size_t>(tiles_x) * tiles_y;
-
-  // Visible Gaussians in index order, with their depth keys.
   std::vector<std::uint32_t>& order = buffers->order;
   std::vector<std::uint32_t>& keys = buffers->keys;
-  std::vector<std::uint32_t>& offsets = state->gaussian_offsets;
   order.clear();
   keys.clear();
-  offsets.resize(n + 1);
+  offsets->resize(n + 1);
   std::uint64_t total = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    offsets[i] = static_cast<std::uint32_t>(total);
+    (*offsets)[i] = static_cast<std::uint32_t>(total);
     if (p.radius[i] == 0) continue;
     order.push_back(static_cast<std::uint32_t>(i));
     keys.push_back(DepthBits(p.depth[i]));
@@ -56,8 +47,15 @@ void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state) {
                   "more than 2^32 (Gaussian, tile) pairs");
     }
   }
-  offsets[n] = static_cast<std::uint32_t>(total);
-  // LSD radix sort on the 32 depth bits, 8 a pass.
+  (*offsets)[n] = static_cast<std::uint32_t>(total);
+  return static_cast<std::uint32_t>(total);
+}
+
+// LSD radix sort of buffers' order by its keys, the 32 depth bits, 8 a
+// pass (stable: equal depths keep index order).
+void RadixSortByDepth(TileSortBuffers* buffers) {
+  std::vector<std::uint32_t>& order = buffers->order;
+  std::vector<std::uint32_t>& keys = buffers->keys;
   const std::size_t visible = order.size();
   buffers->order_scratch.resize(visible);
   buffers->key_scratch.resize(visible);
@@ -74,6 +72,43 @@ void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state) {
     keys.swap(buffers->key_scratch);
     order.swap(buffers->order_scratch);
   }
+}
+
+// Each tile's range of entries: per tile, the runs' counts one after
+// another (cursors[tiles * run + tile] becomes the run's first position).
+void TileRanges(std::size_t tiles, int threads,
+                std::vector<std::uint32_t>* cursors,
+                std::vector<std::uint32_t>* ranges) {
+  std::uint32_t begin = 0;
+  for (std::size_t t = 0; t < tiles; ++t) {
+    (*ranges)[2 * t] = begin;
+    for (int run = 0; run < threads; ++run) {
+      const std::uint32_t count = (*cursors)[tiles * run + t];
+      (*cursors)[tiles * run + t] = begin;
+      begin += count;
+    }
+    (*ranges)[2 * t + 1] = begin;
+  }
+}
+
+}  // namespace
+
+// The visible Gaussians are sorted once by (depth, index) with an LSD radix
+// sort (stable, so equal depths keep index order), then dealt to their
+// tiles in that order: each tile's list comes out sorted by depth without
+// sorting the (Gaussian, tile) pairs themselves.
+template <typename T>
+void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state) {
+  const ProjectedGaussiansT<T>& p = state->projected;
+  const int width = state->width, height = state->height;
+  const int tiles_x = (width + kTileSize - 1) / kTileSize;
+  const int tiles_y = (height + kTileSize - 1) / kTileSize;
+  const std::size_t tiles = static_cast<std::size_t>(tiles_x) * tiles_y;
+  std::vector<std::uint32_t>& offsets = state->gaussian_offsets;
+  const std::uint32_t total = ListVisible(p, buffers, &offsets);
+  RadixSortByDepth(buffers);
+  const std::vector<std::uint32_t>& order = buffers->order;
+  const std::size_t visible = order.size();
 
   // The sorted Gaussians' tile rectangles, packed for the passes below.
   std::vector<TileSortBuffers::Rect>& rects = buffers->rects;
@@ -112,18 +147,7 @@ void IntersectTiles(TileSortBuffers* buffers, RasterStateT<T>* state) {
     }
 #pragma omp barrier
 #pragma omp single
-    {
-      std::uint32_t begin = 0;
-      for (std::size_t t = 0; t < tiles; ++t) {
-        ranges[2 * t] = begin;
-        for (int run = 0; run < threads; ++run) {
-          const std::uint32_t count = cursors[tiles * run + t];
-          cursors[tiles * run + t] = begin;
-          begin += count;
-        }
-        ranges[2 * t + 1] = begin;
-      }
-    }
+    TileRanges(tiles, threads, &cursors, &ranges);
     for (std::size_t k = k0; k < k1; ++k) {
       const TileSortBuffers::Rect& r = rects[k];
       const int tile_width = r.x1 - r.x0;
