@@ -23,6 +23,7 @@
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/log.h"
+#include "src/core/option_checks.h"
 #include "src/core/progress.h"
 #include "src/core/stamp.h"
 #include "src/core/strings.h"
@@ -348,11 +349,8 @@ void SfmOptions::Check() const {
                 "expected sequential or exhaustive");
   if (stride < 1)
     throw Error("sfm", "--stride", std::to_string(stride), "must be >= 1");
-  if (max_frames < 0)
-    throw Error("sfm", "--max-frames", std::to_string(max_frames),
-                "must be >= 0");
-  if (max_size < 0)
-    throw Error("sfm", "--max-size", std::to_string(max_size), "must be >= 0");
+  CheckNonNegative(max_frames, "sfm", "--max-frames");
+  CheckNonNegative(max_size, "sfm", "--max-size");
 }
 
 namespace {

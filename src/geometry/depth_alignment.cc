@@ -10,6 +10,7 @@
 
 #include "src/core/error.h"
 #include "src/core/median.h"
+#include "src/core/option_checks.h"
 
 namespace pano4d {
 namespace {
@@ -45,9 +46,7 @@ constexpr double kMinDepthSpread = 1e-6;
 }  // namespace
 
 void DepthAlignmentOptions::Check() const {
-  if (!(robust_scale > 0))
-    throw Error("depth alignment", "robust_scale", std::to_string(robust_scale),
-                "must be > 0");
+  CheckPositive(robust_scale, "depth alignment", "robust_scale");
   if (min_samples < 2)
     throw Error("depth alignment", "min_samples", std::to_string(min_samples),
                 "must be >= 2");

@@ -14,6 +14,7 @@
 #include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/median.h"
+#include "src/core/option_checks.h"
 #include "src/core/strings.h"
 #include "src/core/timer.h"
 
@@ -496,9 +497,7 @@ void DynamicMaskOptions::Check() const {
       fail("still_camera_gaps", std::to_string(gap), "gaps must be positive");
     }
   }
-  if (!(noise_factor >= 0.0)) {
-    fail("noise_factor", std::to_string(noise_factor), "must be >= 0");
-  }
+  CheckNonNegative(noise_factor, "dynamic mask options", "noise_factor");
   if (!(agreement > 0.0 && agreement <= 1.0)) {
     fail("agreement", std::to_string(agreement), "must be in (0, 1]");
   }

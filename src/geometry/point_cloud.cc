@@ -4,6 +4,7 @@
 #include <string>
 
 #include "src/core/error.h"
+#include "src/core/option_checks.h"
 #include "src/core/strings.h"
 #include "src/geometry/pcl_bridge.h"
 
@@ -47,15 +48,9 @@ PointCloud UnprojectDepth(const cv::Mat& depth, const cv::Mat& rgb,
 }
 
 void PointCloudFilterOptions::Check() const {
-  if (neighbours < 0)
-    throw Error("point cloud filter", "neighbours", std::to_string(neighbours),
-                "must be >= 0");
-  if (!(std_ratio > 0))
-    throw Error("point cloud filter", "std_ratio", std::to_string(std_ratio),
-                "must be > 0");
-  if (!(voxel_size >= 0))
-    throw Error("point cloud filter", "voxel_size", std::to_string(voxel_size),
-                "must be >= 0");
+  CheckNonNegative(neighbours, "point cloud filter", "neighbours");
+  CheckPositive(std_ratio, "point cloud filter", "std_ratio");
+  CheckNonNegative(voxel_size, "point cloud filter", "voxel_size");
 }
 
 PointCloud FilterPointCloud(const PointCloud& cloud,

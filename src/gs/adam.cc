@@ -5,6 +5,7 @@
 
 #include "src/core/check.h"
 #include "src/core/error.h"
+#include "src/core/option_checks.h"
 
 namespace pano4d {
 namespace {
@@ -22,8 +23,7 @@ void AdamOptions::Check() const {
     throw Error("adam", "beta1", std::to_string(beta1), "must be in [0, 1)");
   if (!(beta2 >= 0 && beta2 < 1))
     throw Error("adam", "beta2", std::to_string(beta2), "must be in [0, 1)");
-  if (!(epsilon > 0))
-    throw Error("adam", "epsilon", std::to_string(epsilon), "must be > 0");
+  CheckPositive(epsilon, "adam", "epsilon");
 }
 
 Adam::Adam(AdamOptions options) : options_(options) { options_.Check(); }

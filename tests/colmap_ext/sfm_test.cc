@@ -141,12 +141,24 @@ TEST_F(SfmTest, ImagesRegisterAndMatchGroundTruthAndRerunsSkip) {
         step.step == "frames" || step.step == "dynamic_masks" ||
         step.step == "feature_extractor" || step.step == "sequential_matcher";
     EXPECT_EQ(step.skipped, before_mapper) << step.step;
-    if (step.step == "mapper")
+    if (step.step == "mapper") {
       EXPECT_EQ(step.why, "its output sparse/0 is gone");
-    if (step.step == "register_left_out")
+    }
+    if (step.step == "register_left_out") {
       EXPECT_EQ(step.why, "an earlier step ran");
+    }
   }
   EXPECT_GE(rebuilt.registered, 0.9 * report.frames);
+  // An option changed: the step that takes it says so, and every later
+  // step runs again.
+  SfmOptions larger = options;
+  larger.max_size = 4096;  // above the frames' size: they stay as they are
+  const SfmReport changed = RunSfm(larger);
+  ASSERT_FALSE(changed.steps.empty());
+  EXPECT_EQ(changed.steps.front().why, "option max_size was 0, now 4096");
+  for (std::size_t i = 1; i < changed.steps.size(); ++i)
+    EXPECT_EQ(changed.steps[i].why, "an earlier step ran")
+        << changed.steps[i].step;
 }
 
 // Frames numbered without padding (f1 ... f12 ...) keep their time order
