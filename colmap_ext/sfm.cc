@@ -79,13 +79,22 @@ cv::Mat Resized(const cv::Mat& bgr, int max_size) {
   return out;
 }
 
+// The indices of `count` frames that --stride and --max-frames keep.
+std::vector<std::size_t> KeptIndices(std::size_t count, const SfmOptions& o) {
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < count; i += o.stride) {
+    if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
+      break;
+    kept.push_back(i);
+  }
+  return kept;
+}
+
 // The known frames that --stride and --max-frames keep, with their cameras
 // scaled as the frames are by --max-size.
 std::vector<KnownFrame> KeptKnownFrames(const SfmOptions& o) {
   std::vector<KnownFrame> kept;
-  for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
-    if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
-      break;
+  for (const std::size_t i : KeptIndices(o.known.size(), o)) {
     KnownFrame frame = o.known[i];
     const Camera& c = frame.camera.camera;
     const cv::Size size = ResizedSize(c.width, c.height, o.max_size);
@@ -161,10 +170,9 @@ std::vector<std::string> WriteVideoFrames(const SfmOptions& o,
 std::vector<std::string> WriteKnownFrames(const SfmOptions& o,
                                           const fs::path& images_dir) {
   std::vector<std::string> names;
-  ProgressBar bar("sfm: frames", o.known.size());
-  for (std::size_t i = 0; i < o.known.size(); i += o.stride) {
-    if (o.max_frames > 0 && static_cast<int>(names.size()) >= o.max_frames)
-      break;
+  const std::vector<std::size_t> kept = KeptIndices(o.known.size(), o);
+  ProgressBar bar("sfm: frames", kept.size());
+  for (const std::size_t i : kept) {
     const cv::Mat bgr = ReadImage(o.known[i].image).ToBgr8();
     const Camera& camera = o.known[i].camera.camera;
     if (bgr.cols != camera.width || bgr.rows != camera.height) {
@@ -174,7 +182,7 @@ std::vector<std::string> WriteKnownFrames(const SfmOptions& o,
     }
     WritePng8(images_dir / o.known[i].name, Resized(bgr, o.max_size));
     names.push_back(o.known[i].name);
-    bar.Add(o.stride);
+    bar.Add();
   }
   return names;
 }
@@ -184,13 +192,10 @@ std::vector<std::string> WriteKnownFrames(const SfmOptions& o,
 // (frame_2, frame_10) get their position in front (000001_frame_2).
 std::vector<std::string> WriteFolderFrames(const SfmOptions& o,
                                            const fs::path& images_dir) {
-  std::vector<fs::path> files = ListImages(o.images);
+  const std::vector<fs::path> files = ListImages(o.images);
   std::vector<fs::path> kept;
-  for (std::size_t i = 0; i < files.size(); i += o.stride) {
-    if (o.max_frames > 0 && static_cast<int>(kept.size()) >= o.max_frames)
-      break;
+  for (const std::size_t i : KeptIndices(files.size(), o))
     kept.push_back(files[i]);
-  }
   std::vector<std::string> stems;
   for (const fs::path& f : kept) stems.push_back(f.stem().string());
   const bool prefix = !std::is_sorted(stems.begin(), stems.end());
@@ -444,7 +449,7 @@ void SfmSteps::Step(const std::string& name, const StageRecord& record,
                           : std::nullopt;
   const std::optional<std::string> why = stamp.Decide(record, forced);
   const bool runs = why.has_value();
-  double seconds = stamp.Seconds();
+  double seconds = runs ? 0.0 : stamp.Seconds();
   if (runs) {
     Timer timer;
     stamp.Remove();  // a step that fails half way leaves no stamp

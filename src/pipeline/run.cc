@@ -298,6 +298,7 @@ class Pipeline {
   RunSummary summary_;
   Timer total_;
   std::optional<SfmDiagnosis> posed_;
+  WorkspaceFrames frames_;  // depth's, read once it ran
   std::string camera_motion_ = "general";
 };
 
@@ -401,7 +402,8 @@ void Pipeline::DepthStage() {
 
 // The dynamic masks exist now: the motion decision.
 void Pipeline::MotionDecision() {
-  facts_.dynamic_fraction = DynamicFraction(ReadWorkspaceFrames(ws_.root()));
+  frames_ = ReadWorkspaceFrames(ws_.root());
+  facts_.dynamic_fraction = DynamicFraction(frames_);
   plan_ = MakePlan(facts_);
   PANO4D_LOG(kInfo) << "run: motion: " << plan_.Get("motion").why;
   WritePlan(ws_, o_, plan_, summary_.stages);
@@ -415,8 +417,7 @@ void Pipeline::FitStage() {
     f.priors = o_.depth.priors;
     if (!plan_.Runs("motion")) f.init.num_bases = 0;
     if (!plan_.Runs("expansion")) f.expand = false;
-    const FitOptions used =
-        ResolveFitOptions(f, FitInputOf(ReadWorkspaceFrames(ws_.root())));
+    const FitOptions used = ResolveFitOptions(f, FitInputOf(frames_));
     FitInputs inputs = LoadFitInputs(ws_, f.priors);
     const std::optional<std::string> stale =
         StageStamp(ws_, "fit").Decide(FitStageRecord(ws_, used, inputs.train));
