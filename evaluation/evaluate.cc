@@ -157,10 +157,10 @@ struct MaskCounts {
 
 // One frame's metrics: on every pixel, and with a covisible mask on the
 // covisible (m*) and unseen (u*) pixels.
-FrameMetrics ScoreFrame(const DatasetFrame& f, const fs::path& render_path,
+FrameMetrics ScoreFrame(const DatasetFrame& f, const Image& render,
+                        const fs::path& render_path,
                         const std::optional<Lpips>& lpips, MaskCounts* counts) {
   const Image truth = ReadImage(f.rgb);
-  const Image render = ReadImage(render_path);
   if (render.width() != truth.width() || render.height() != truth.height()) {
     throw Error(render_path.string(), "size", Size(render),
                 "expected " + Size(truth) + " like " + f.rgb.string());
@@ -211,6 +211,63 @@ FrameMetrics ScoreFrame(const DatasetFrame& f, const fs::path& render_path,
     ++counts->empty_unseen;
   }
   return m;
+}
+
+// The mean of every pixel of the training frames.
+std::optional<std::array<double, 3>> MeanTrainingColour(
+    const std::vector<DatasetFrame>& train) {
+  cv::Scalar sum = cv::Scalar::all(0);
+  double pixels = 0;
+  for (const DatasetFrame& f : train) {
+    const Image image = ReadImage(f.rgb);
+    const double n = static_cast<double>(image.width()) * image.height();
+    sum += cv::mean(image.mat()) * n;
+    pixels += n;
+  }
+  if (pixels == 0) return std::nullopt;
+  return std::array<double, 3>{sum[0] / pixels, sum[1] / pixels,
+                               sum[2] / pixels};
+}
+
+// The mean of each metric over the frames that define it.
+MetricRow MeanOver(const std::vector<FrameMetrics>& frames,
+                   std::array<int, kNumMetrics>* used) {
+  MetricRow mean;
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    double sum = 0;
+    int n = 0;
+    for (const FrameMetrics& m : frames) {
+      if (m.values[k]) {
+        sum += *m.values[k];
+        ++n;
+      }
+    }
+    if (used) (*used)[k] = n;
+    if (n > 0) mean[k] = sum / n;
+  }
+  return mean;
+}
+
+// Each frame of `frames` painted with the training frames' mean colour,
+// scored as a render.
+std::optional<MeanColourFloor> ScoreMeanColour(
+    const std::vector<DatasetFrame>& train,
+    const std::vector<DatasetFrame>& frames) {
+  const std::optional<std::array<double, 3>> rgb = MeanTrainingColour(train);
+  if (!rgb) return std::nullopt;
+  MeanColourFloor floor;
+  floor.rgb = *rgb;
+  std::vector<FrameMetrics> scored;
+  MaskCounts ignored;
+  for (const DatasetFrame& f : frames) {
+    const Image truth = ReadImage(f.rgb);
+    Image constant(truth.width(), truth.height());
+    constant.mat().setTo(cv::Scalar((*rgb)[0], (*rgb)[1], (*rgb)[2]));
+    scored.push_back(ScoreFrame(f, constant, "the mean training colour",
+                                std::nullopt, &ignored));
+  }
+  floor.mean = MeanOver(scored, nullptr);
+  return floor;
 }
 
 // What a reader of the means must know: the LPIPS weights, DyCheck's SSIM,
@@ -290,24 +347,13 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
                        static_cast<std::int64_t>(frames.size()));
   MaskCounts counts;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    result.frames.push_back(
-        ScoreFrame(frames[i], render_paths[i], lpips, &counts));
+    result.frames.push_back(ScoreFrame(frames[i], ReadImage(render_paths[i]),
+                                       render_paths[i], lpips, &counts));
     progress.Add();
   }
   progress.Finish();
-
-  for (std::size_t k = 0; k < kNumMetrics; ++k) {
-    double sum = 0;
-    int n = 0;
-    for (const FrameMetrics& m : result.frames) {
-      if (m.values[k]) {
-        sum += *m.values[k];
-        ++n;
-      }
-    }
-    result.frames_used[k] = n;
-    if (n > 0) result.mean[k] = sum / n;
-  }
+  result.mean = MeanOver(result.frames, &result.frames_used);
+  result.floor = ScoreMeanColour(dataset.train, frames);
   result.notes = EvaluationNotes(result, options, lpips.has_value(), counts);
   return result;
 }
@@ -317,11 +363,16 @@ Json EvaluationJson(const EvaluationResult& r) {
   Json used = Json::object();
   for (std::size_t k = 0; k < kNumMetrics; ++k)
     used[kMetricKeys[k]] = r.frames_used[k];
+  Json floor;
+  if (r.floor) {
+    floor = {{"rgb", r.floor->rgb}, {"mean", MetricRowJson(r.floor->mean)}};
+  }
   return Json{{"dataset", r.dataset},      {"scene", r.scene},
               {"protocol", r.protocol},    {"kind", r.kind},
               {"split", r.split},          {"factor", r.factor},
               {"frames", r.frames.size()}, {"mean", mean},
-              {"frames_used", used},       {"notes", r.notes}};
+              {"frames_used", used},       {"mean_colour_floor", floor},
+              {"notes", r.notes}};
 }
 
 std::string EvaluationCsv(const EvaluationResult& r) {
@@ -353,6 +404,16 @@ std::string EvaluationMarkdown(const EvaluationResult& r,
   for (std::size_t k = 0; k < 9; ++k)
     out << " " << Cell(r.mean[k], MetricFormat(k)) << " |";
   out << "\n";
+  if (r.floor) {
+    out << "| mean training colour (floor) |";
+    for (std::size_t k = 0; k < 9; ++k) {
+      out << " "
+          << (r.floor->mean[k] ? Cell(r.floor->mean[k], MetricFormat(k))
+                               : std::string("-"))
+          << " |";
+    }
+    out << "\n";
+  }
   AppendRows(out, scene_rows);
   if (scene_rows.empty())
     out << "\nNo published per-scene rows for this scene in datasets_meta/.\n";
@@ -365,6 +426,13 @@ std::string EvaluationMarkdown(const EvaluationResult& r,
   out << "\nStrict masked SSIM (only windows that touch the mask): mSSIM "
       << Cell(r.mean[kMssimStrict], "%.3f") << ", uSSIM "
       << Cell(r.mean[kUssimStrict], "%.3f") << "\n\n";
+  if (r.floor && r.mean[kUpsnr] && r.floor->mean[kUpsnr]) {
+    out << "uPSNR against the floor of the mean training colour: "
+        << Cell(r.mean[kUpsnr], "%.2f") << " against "
+        << Cell(r.floor->mean[kUpsnr], "%.2f") << " ("
+        << Cell(*r.mean[kUpsnr] - *r.floor->mean[kUpsnr], "%+.2f")
+        << " dB)\n\n";
+  }
   for (const std::string& note : r.notes) out << "- " << note << "\n";
   if (!benchmark_known)
     out << "- no published rows: datasets_meta/ has no file for this kind\n";

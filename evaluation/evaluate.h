@@ -39,6 +39,15 @@ struct FrameMetrics {
   MetricRow values;
 };
 
+// The floor every method must clear on the pixels no training frame saw:
+// each evaluated frame painted with one colour, the mean over every pixel
+// of the training frames, and scored as a render (no LPIPS). A method
+// whose uPSNR is below it paints those pixels worse than a constant.
+struct MeanColourFloor {
+  std::array<double, 3> rgb{};  // in [0, 1]
+  MetricRow mean;
+};
+
 struct EvaluationResult {
   std::string dataset;   // root folder
   std::string scene;     // Dataset::scene
@@ -50,6 +59,8 @@ struct EvaluationResult {
   MetricRow mean;                              // plain mean over defined frames
   std::array<int, kNumMetrics> frames_used{};  // frames each mean is over
   std::vector<std::string> notes;              // why a column is unavailable
+  // Absent when the dataset has no training frames to take a colour from.
+  std::optional<MeanColourFloor> floor;
 };
 
 struct EvaluateOptions {

@@ -120,6 +120,14 @@ cv::Mat DrawPlot(const std::vector<Series>& series,
                 kFontScale, kBlack, 1, cv::LINE_AA);
   }
   cv::rectangle(image, a, kBlack, 1);
+  for (const PlotMarker& m : options.markers) {
+    if (!std::isfinite(m.x)) continue;
+    const int u = static_cast<int>(std::lround(frame.ToPixel(m.x, 0).x));
+    for (int v = a.y; v < a.y + a.height; v += 8)  // dashed
+      cv::line(image, {u, v}, {u, std::min(v + 4, a.y + a.height)}, kBlack, 1);
+    cv::putText(image, m.label, {u + 4, a.y + a.height - 8}, kFont, kFontScale,
+                kBlack, 1, cv::LINE_AA);
+  }
 
   // Series: a line through the points that exist (validation metrics are
   // recorded only every so often), a dot on each.
@@ -159,9 +167,10 @@ cv::Mat DrawPlot(const std::vector<Series>& series,
   return image;
 }
 
-void PlotRunLog(const std::filesystem::path& csv,
-                const std::filesystem::path& png,
-                std::vector<std::string> columns, const std::string& title) {
+void PlotRunLog(
+    const std::filesystem::path& csv, const std::filesystem::path& png,
+    std::vector<std::string> columns, const std::string& title,
+    const std::vector<std::pair<std::int64_t, std::string>>& marks) {
   const RunLog log = ReadRunLog(csv);
   if (columns.empty())
     columns.assign(log.columns.begin() + 2, log.columns.end());
@@ -190,6 +199,12 @@ void PlotRunLog(const std::filesystem::path& csv,
                              : log.stages.front() + ": error against run time")
                       : title;
   options.y_label = all_psnr ? "PSNR (dB)" : "value";
+  for (const auto& [iteration, label] : marks) {
+    for (std::size_t r = 0; r < log.rows.size(); ++r) {
+      if (log.iterations[r] == iteration && log.rows[r][0])
+        options.markers.push_back({*log.rows[r][0], label});
+    }
+  }
   const cv::Mat image = DrawPlot(series, options);
   WritePng8(png, image);
 }

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -17,8 +19,15 @@ struct Series {
   std::vector<double> y;
 };
 
+// A vertical line across the plot at x, labelled (a fit's convergence).
+struct PlotMarker {
+  double x = 0;
+  std::string label;
+};
+
 struct PlotOptions {
   std::string title;
+  std::vector<PlotMarker> markers;
   std::string x_label = "wall time (s)";
   std::string y_label;
   int width = 960;
@@ -43,10 +52,12 @@ cv::Mat DrawPlot(const std::vector<Series>& series, const PlotOptions& options);
 
 // Plots columns of a RunRecorder CSV against wall time into a PNG (written
 // atomically). `columns` empty: every value column but wall_s and cpu_s.
-void PlotRunLog(const std::filesystem::path& csv,
-                const std::filesystem::path& png,
-                std::vector<std::string> columns = {},
-                const std::string& title = "");
+// `marks`: (iteration, label) pairs drawn as PlotMarkers at the wall time
+// of the log's row of that iteration (none where the log has no such row).
+void PlotRunLog(
+    const std::filesystem::path& csv, const std::filesystem::path& png,
+    std::vector<std::string> columns = {}, const std::string& title = "",
+    const std::vector<std::pair<std::int64_t, std::string>>& marks = {});
 
 // The colour of series i (BGR).
 cv::Scalar SeriesColor(std::size_t i);

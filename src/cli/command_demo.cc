@@ -65,6 +65,10 @@ void AddDemoCommand(CLI::App& app, Action* action) {
       f.expansion.every = std::max(1, it / (kDemoExpansions + 1));
     if (sub->count("--validate-every") == 0)
       f.validate_every = std::max(1, it / kDemoValidations);
+    // The demo's 3000 is its schedule, not a length asked for: the
+    // convergence stop may end it, as a fit's default schedule.
+    if (sub->count("--iterations") == 0 && !f.converge_on)
+      f.converge_on = ConvergeOn::kAuto;
     *action = [o] {
       const FolderLock lock = LockWorkspace(o->run.workspace);
       Timer total;

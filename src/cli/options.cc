@@ -286,8 +286,34 @@ void AddFitOptions(CLI::App* app, FitOptions* o) {
   app->add_option_function<int>(
          "--iterations", [o](int n) { o->iterations = n; },
          "Training iterations (default: 100 per training frame, 2000 to "
-         "10000)")
+         "10000, ended earlier by the convergence stop; a number given here "
+         "runs to its end unless --converge-on is given too)")
       ->check(Positive());
+  app->add_option_function<std::string>(
+         "--converge-on",
+         [o](const std::string& s) { o->converge_on = ParseConvergeOn(s); },
+         "The convergence stop's signal: val (the validation frames' PSNR; "
+         "the stopping iteration is then chosen on them), train (every "
+         "training frame's PSNR), auto (val when there are validation "
+         "frames, else train; the default unless --iterations is given) or "
+         "off. It samples every --converge-every iterations after the last "
+         "expansion step and the end of densification, and stops when the "
+         "last --converge-window iterations gained less than "
+         "--converge-min-gain dB")
+      ->check(CLI::IsMember({"auto", "val", "train", "off"}));
+  app->add_option("--converge-every", o->convergence.every,
+                  "Iterations between the convergence stop's samples")
+      ->capture_default_str()
+      ->check(Positive());
+  app->add_option("--converge-window", o->convergence.window,
+                  "Iterations over which the convergence stop measures the "
+                  "gain (a multiple of --converge-every)")
+      ->capture_default_str()
+      ->check(Positive());
+  app->add_option("--converge-min-gain", o->convergence.min_gain,
+                  "The least gain (dB) over the window that keeps a fit going")
+      ->capture_default_str()
+      ->check(NonNegative());
   AddTrainerOptions(app, &o->trainer);
   app->add_option_function<double>(
          "--depth-weight", [o](double w) { o->depth_weight = w; },

@@ -56,6 +56,10 @@ class Workspace {
   std::filesystem::path checkpoint() const {
     return pano4d() / "checkpoints" / "fit.ckpt";
   }
+  // The convergence stop's samples up to the checkpoint, saved with it.
+  std::filesystem::path convergence_samples() const {
+    return pano4d() / "checkpoints" / "convergence.json";
+  }
   std::filesystem::path fit_json() const { return pano4d() / "fit.json"; }
   // `fit --force`: the fit it replaces, until the new one completes.
   std::filesystem::path previous_fit() const {

@@ -18,6 +18,7 @@
 #include "src/lab/bench.h"
 #include "src/pipeline/fit_options.h"
 #include "src/render/bench_scene.h"
+#include "src/render/rasterize_to_pixels.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -111,6 +112,10 @@ PhaseTimes FitStepPhases(const GaussianScene& scene,
   return t;
 }
 
+// Seconds each blend probe runs (ProbeBlendCeiling): long enough that a
+// scheduler's tick does not decide it.
+constexpr double kProbeSeconds = 0.5;
+
 // Medians over runs of rendering a scene, forward and backward, with the
 // rasterizer's phases and per-run means of its counts.
 struct RenderTimes {
@@ -118,6 +123,10 @@ struct RenderTimes {
   double project = 0, bin = 0, blend = 0, blend_backward = 0,
          project_backward = 0;
   std::uint64_t visible = 0, evaluations = 0, entries = 0;  // summed
+  std::uint64_t backward_evaluations = 0;                   // summed
+  // (Gaussian, pixel) pairs per second of the blend, forward and backward:
+  // summed pairs over summed blend time.
+  double forward_pairs_per_s = 0, backward_pairs_per_s = 0;
 };
 
 // `repeats` runs, run r at camera r mod cameras and its time.
@@ -133,6 +142,7 @@ RenderTimes TimeRenders(const GaussianScene& scene,
   std::vector<double> compose_ms, forward_ms, backward_ms, project_ms, bin_ms,
       blend_ms, blend_backward_ms, project_backward_ms;
   RenderTimes t;
+  double blend_total = 0, blend_backward_total = 0;  // ms
   GaussianGradients grad;
   RenderGradients d_out;
   for (int r = 0; r < repeats; ++r) {
@@ -155,6 +165,9 @@ RenderTimes TimeRenders(const GaussianScene& scene,
         rasterizer.Backward(model, cameras[v], {}, state, out, d_out, &grad);
     backward_ms.push_back(1e3 * backward.WallSeconds());
     blend_backward_ms.push_back(backward_stats.blend_ms);
+    t.backward_evaluations += backward_stats.pixel_evaluations;
+    blend_total += state.stats.blend_ms;
+    blend_backward_total += backward_stats.blend_ms;
     project_backward_ms.push_back(backward_stats.project_ms);
   }
   t.compose = UpperMedian(compose_ms);
@@ -165,6 +178,9 @@ RenderTimes TimeRenders(const GaussianScene& scene,
   t.blend = UpperMedian(blend_ms);
   t.blend_backward = UpperMedian(blend_backward_ms);
   t.project_backward = UpperMedian(project_backward_ms);
+  t.forward_pairs_per_s = t.evaluations / (1e-3 * blend_total);
+  t.backward_pairs_per_s =
+      t.backward_evaluations / (1e-3 * blend_backward_total);
   return t;
 }
 
@@ -185,6 +201,20 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
   const RenderTimes t = TimeRenders(scene, cameras, times, repeats);
   const double f = t.forward, b = t.backward, c = t.compose;
   const PhaseTimes step = FitStepPhases(scene, frames, repeats);
+  // The blend's ceiling on one and two threads, and at this bench's count.
+  const BlendCeiling one = ProbeBlendCeiling(1, kProbeSeconds);
+  const BlendCeiling two = ProbeBlendCeiling(2, kProbeSeconds);
+  const BlendCeiling here =
+      threads == 1
+          ? one
+          : (threads == 2 ? two : ProbeBlendCeiling(threads, kProbeSeconds));
+  const double forward_share = t.forward_pairs_per_s / here.forward_pairs_per_s;
+  const double backward_share =
+      t.backward_pairs_per_s / here.backward_pairs_per_s;
+  const auto probe_json = [](const BlendCeiling& c) {
+    return nlohmann::json{{"forward_pairs_per_s", c.forward_pairs_per_s},
+                          {"backward_pairs_per_s", c.backward_pairs_per_s}};
+  };
   const int width = cameras[0].width, height = cameras[0].height;
   BenchResult result;
   result.rows.push_back(
@@ -208,6 +238,15 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
        {"tile_entries", t.entries / repeats},
        {"pixel_evaluations", t.evaluations / repeats},
        {"pixel_evaluations_per_s", t.evaluations / (1e-3 * f * repeats)},
+       {"blend",
+        {{"forward_pairs_per_s", t.forward_pairs_per_s},
+         {"backward_pairs_per_s", t.backward_pairs_per_s},
+         {"backward_pairs", t.backward_evaluations / repeats},
+         {"ceiling", probe_json(here)},
+         {"ceiling_1_thread", probe_json(one)},
+         {"ceiling_2_threads", probe_json(two)},
+         {"forward_fraction", forward_share},
+         {"backward_fraction", backward_share}}},
        {"step_ms",
         {{"compose", 1e3 * step.compose},
          {"forward", 1e3 * step.forward},
@@ -233,6 +272,15 @@ BenchResult BenchFittedScene(const BenchRenderOptions& options) {
       "forward: project %.2f, bin %.2f, blend %.2f ms; backward: blend "
       "%.2f, project %.2f ms (medians)\n",
       t.project, t.bin, t.blend, t.blend_backward, t.project_backward);
+  result.table += StringPrintf(
+      "blend: forward %.1f M pairs/s, %.0f%% of the probed ceiling (%.1f M "
+      "at %d threads); backward %.1f M pairs/s, %.0f%% of %.1f M (probe, 1 "
+      "thread: %.1f / %.1f M, 2 threads: %.1f / %.1f M)\n",
+      1e-6 * t.forward_pairs_per_s, 100 * forward_share,
+      1e-6 * here.forward_pairs_per_s, threads, 1e-6 * t.backward_pairs_per_s,
+      100 * backward_share, 1e-6 * here.backward_pairs_per_s,
+      1e-6 * one.forward_pairs_per_s, 1e-6 * one.backward_pairs_per_s,
+      1e-6 * two.forward_pairs_per_s, 1e-6 * two.backward_pairs_per_s);
   result.table += StringPrintf(
       "fit step (densification off, mean of %d): %.2f ms: compose %.2f, "
       "forward %.2f, losses %.2f, backward %.2f, motion %.2f, optimiser "

@@ -345,6 +345,9 @@ StageRecord FitStageRecord(const Workspace& ws, const FitOptions& used,
   const nlohmann::json options = ResumeFingerprint(used);
   for (const auto& [key, value] : options.items()) record.Option(key, value);
   record.Option("iterations", used.trainer.iterations);
+  // Where the fit ends, which the resume fingerprint leaves out.
+  record.Option("converge_on", ConvergeOnName(*used.converge_on));
+  record.Option("convergence", used.convergence.ToJson());
   record.Content(kTrainingFrames, ViewsFingerprint(views));
   // The tracks and masks of the priors folder, which the views do not hold.
   if (!used.priors.empty()) record.File(used.priors);
@@ -362,7 +365,8 @@ std::optional<std::string> CheckpointMismatch(
   // The checkpoint records the options and the frames; a checkpoint
   // resumes to more iterations.
   nlohmann::json now = FitStageRecord(ws, used, views).json();
-  now["options"].erase("iterations");
+  for (const char* ends : {"iterations", "converge_on", "convergence"})
+    now["options"].erase(ends);
   now.erase("files");
   return RecordDifference({{"options", saved.options},
                            {"contents", {{kTrainingFrames, saved.scene}}}},
@@ -379,7 +383,8 @@ class FitRun {
       : ws_(ws),
         given_(given),
         o_(ResolveFitOptions(given, {inputs->depth_source,
-                                     static_cast<int>(inputs->train.size())})),
+                                     static_cast<int>(inputs->train.size()),
+                                     static_cast<int>(inputs->val.size())})),
         inputs_(*inputs),
         stop_(*stop) {}
 
@@ -390,8 +395,11 @@ class FitRun {
   std::unique_ptr<Trainer> StartTrainer(bool resuming);
   void RunDueExpansions(Trainer* trainer);
   void CarveIfDue(Trainer* trainer);
+  void StartConvergence(const Trainer& trainer, bool resuming);
   void RecordIteration(Trainer* trainer, RunRecorder* recorder,
                        ProgressBar* bar);
+  bool Converged(Trainer* trainer);
+  void SaveCheckpoint(Trainer* trainer);
   bool StopsEarly(Trainer* trainer);
   void WriteProducts(Trainer* trainer);
 
@@ -402,6 +410,9 @@ class FitRun {
   const std::atomic<bool>& stop_;
   FitSummary summary_;
   ExpansionState ex_;
+  std::optional<ConvergenceRule> rule_;
+  QuickMetrics validated_;  // at validated_at, by RecordIteration
+  std::int64_t validated_at_ = -1;
   LossWindow window_;
   Timer total_;
 };
@@ -486,15 +497,22 @@ void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
                              ProgressBar* bar) {
   const std::vector<ValidationView>& val = inputs_.val;
   const std::int64_t it = trainer->iteration();
+  // A convergence sample gets a row (the plot marks a stop there), and
+  // validation when the stop reads it.
+  const bool sample = rule_ && rule_->Due(it);
   const bool validate =
-      !val.empty() && (it % o_.validate_every == 0 || trainer->Done());
-  if (it % o_.log_every != 0 && !validate && !trainer->Done()) return;
+      !val.empty() && (it % o_.validate_every == 0 || trainer->Done() ||
+                       (sample && o_.converge_on == ConvergeOn::kValidation));
+  if (it % o_.log_every != 0 && !validate && !trainer->Done() && !sample)
+    return;
   QuickMetrics q;
   if (validate) {
     Timer t;
     q = Validate(trainer, val);
     summary_.last_validation = q;
     summary_.seconds.validation += t.WallSeconds();
+    validated_ = q;
+    validated_at_ = it;
   }
   const double n = window_.steps;
   recorder->Record(
@@ -510,24 +528,86 @@ void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
   window_ = {};
 }
 
+// The convergence stop, gated after the last expansion step and the end of
+// densification; a resumed run takes back the samples saved with its
+// checkpoint, and one that had converged there ends at once.
+void FitRun::StartConvergence(const Trainer& trainer, bool resuming) {
+  if (o_.converge_on == ConvergeOn::kOff) return;
+  std::int64_t last_expansion = 0;
+  if (ex_.expansion) {
+    last_expansion = o_.expansion.one_step
+                         ? o_.expansion.every
+                         : (o_.trainer.iterations - 1) / o_.expansion.every *
+                               o_.expansion.every;
+  }
+  rule_.emplace(o_.convergence,
+                ConvergenceGate(last_expansion,
+                                trainer.options().strategy.densify_until));
+  const fs::path saved = ws_.convergence_samples();
+  if (resuming && fs::exists(saved)) {
+    std::vector<std::pair<std::int64_t, double>> samples;
+    try {
+      samples = GetJson<Json>(ReadJson(saved), "samples", saved.string())
+                    .get<std::vector<std::pair<std::int64_t, double>>>();
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(saved.string(), "samples", "",
+                  std::string("not a list of [iteration, PSNR] pairs (") +
+                      e.what() + "); delete it to resume without them");
+    }
+    rule_->Restore(samples, trainer.iteration());
+    if (!rule_->reason().empty())
+      summary_.termination = FitTermination::kConverged;
+  }
+}
+
+// Whether the convergence stop ends the fit at this iteration.
+bool FitRun::Converged(Trainer* trainer) {
+  const std::int64_t it = trainer->iteration();
+  if (!rule_ || !rule_->Due(it) || trainer->Done()) return false;
+  std::optional<double> psnr;
+  if (o_.converge_on == ConvergeOn::kTraining) {
+    const Timer t;
+    psnr = TrainPsnr(trainer);
+    summary_.seconds.validation += t.WallSeconds();
+  } else if (validated_at_ == it) {
+    psnr = validated_.psnr;
+  }
+  if (!psnr) return false;
+  const std::optional<std::string> reason = rule_->Add(it, *psnr);
+  if (!reason) return false;
+  summary_.termination = FitTermination::kConverged;
+  PANO4D_LOG(kInfo) << "fit: converged at iteration " << it << ": "
+                    << ConvergeOnName(*o_.converge_on) << " " << *reason;
+  return true;
+}
+
+// The trainer's checkpoint and the convergence samples up to it.
+void FitRun::SaveCheckpoint(Trainer* trainer) {
+  trainer->SaveCheckpoint(ws_.checkpoint());
+  if (rule_)
+    WriteJson(ws_.convergence_samples(), {{"samples", rule_->samples()}});
+}
+
 // Checkpoints every --checkpoint-every iterations and at the end; true
-// when the fit ends here (done, the time budget spent, or a stop asked).
+// when the fit ends here (done, converged, the time budget spent, or a
+// stop asked).
 bool FitRun::StopsEarly(Trainer* trainer) {
   const fs::path ckpt = ws_.checkpoint();
   const std::int64_t it = trainer->iteration();
-  if (it % o_.checkpoint_every == 0 || trainer->Done())
-    trainer->SaveCheckpoint(ckpt);
-  if (trainer->Done()) return true;
+  const bool converged = Converged(trainer);
+  if (it % o_.checkpoint_every == 0 || trainer->Done() || converged)
+    SaveCheckpoint(trainer);
+  if (trainer->Done() || converged) return true;
   if (o_.time_budget > 0 && total_.WallSeconds() > o_.time_budget) {
     summary_.termination = FitTermination::kTimeBudget;
-    trainer->SaveCheckpoint(ckpt);
+    SaveCheckpoint(trainer);
     PANO4D_LOG(kInfo) << "fit: time budget of " << o_.time_budget
                       << " s reached at iteration " << it;
     return true;
   }
   if (stop_.load() || StopRequested()) {
     summary_.termination = FitTermination::kStopped;
-    trainer->SaveCheckpoint(ckpt);
+    SaveCheckpoint(trainer);
     PANO4D_LOG(kInfo) << "fit: stopped at iteration " << it
                       << (StopRequested() ? " on request (signal)" : "")
                       << "; checkpoint " << ckpt.string();
@@ -549,16 +629,29 @@ void FitRun::WriteProducts(Trainer* trainer) {
   summary_.train_psnr = TrainPsnr(trainer);
   WriteValidation(ws_, o_, inputs_, trainer, ex_.expansion.get(), &summary_);
   try {
+    std::vector<std::pair<std::int64_t, std::string>> marks;
+    if (summary_.termination == FitTermination::kConverged) {
+      marks.emplace_back(
+          trainer->iteration(),
+          "converged at " + std::to_string(trainer->iteration()));
+    }
     PlotRunLog(ws_.fit_csv(), ws_.fit_plot(),
                {"train_psnr", "val_psnr", "val_mpsnr", "val_upsnr"},
-               "pano4d fit: PSNR (dB) against wall time");
+               "pano4d fit: PSNR (dB) against wall time", marks);
   } catch (const Error& e) {
     PANO4D_LOG(kWarning) << "fit: no plot: " << e.what();
   }
   Summarise(*trainer, ex_, &summary_);
+  if (rule_) {
+    summary_.convergence = {{"signal", ConvergeOnName(*o_.converge_on)},
+                            {"gate", rule_->gate()},
+                            {"samples", rule_->samples()},
+                            {"reason", rule_->reason()}};
+  }
   summary_.seconds.total = total_.WallSeconds();
   WriteJson(ws_.fit_json(), summary_.ToJson());
-  if (summary_.termination == FitTermination::kIterationsDone) {
+  if (summary_.termination == FitTermination::kIterationsDone ||
+      summary_.termination == FitTermination::kConverged) {
     StageStamp(ws_, "fit")
         .Write(FitStageRecord(ws_, o_, trainer->views()),
                summary_.seconds.total);
@@ -578,13 +671,15 @@ FitSummary FitRun::Run() {
   }
   const std::unique_ptr<Trainer> trainer = StartTrainer(resuming);
   ex_ = StartExpansion(ws_, o_, resuming, trainer.get(), &summary_);
+  StartConvergence(*trainer, resuming);
   RunRecorder recorder(ws_.fit_csv(), "fit",
                        {"loss", "l1", "depth_loss", "train_psnr", "gaussians",
                         "val_psnr", "val_mpsnr", "val_upsnr"},
                        resuming && fs::exists(ws_.fit_csv()));
   ProgressBar bar("fit", o_.trainer.iterations);
   bar.Add(trainer->iteration());
-  while (!trainer->Done()) {
+  while (!trainer->Done() &&
+         summary_.termination != FitTermination::kConverged) {
     RunDueExpansions(trainer.get());
     summary_.last_step = trainer->Step();
     CarveIfDue(trainer.get());

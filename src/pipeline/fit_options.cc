@@ -45,6 +45,7 @@ void FitOptions::Check() const {
     throw Error("--panorama-width", "", std::to_string(panorama_width),
                 "must be at least 2");
   }
+  if (converge_on != ConvergeOn::kOff) convergence.Check();
   trainer.Check();
   init.Check();
   if (expand) expansion.Check();
@@ -64,29 +65,34 @@ nlohmann::json FitOptions::ToJson() const {
   expansion_json["warp_depth"] =
       warp_depth ? nlohmann::json(WarpDepthName(*warp_depth))
                  : nlohmann::json();
-  return {{"seed", seed},
-          {"trainer", trainer_json},
-          {"init", init_json},
-          {"expand", expand},
-          {"expansion", expansion_json},
-          {"prior_cmd", prior_cmd},
-          {"prior_timeout", prior_timeout},
-          {"priors", priors.string()},
-          {"panorama_width", panorama_width},
-          {"iterations", optional(iterations)},
-          {"depth_weight", optional(depth_weight)},
-          {"warp_depth", expansion_json["warp_depth"]},
-          {"voxel_pixels", optional(voxel_pixels)},
-          {"resume", resume},
-          {"deterministic", deterministic},
-          {"checkpoint_every", checkpoint_every},
-          {"validate_every", validate_every},
-          {"log_every", log_every},
-          {"time_budget", time_budget}};
+  return {
+      {"seed", seed},
+      {"trainer", trainer_json},
+      {"init", init_json},
+      {"expand", expand},
+      {"expansion", expansion_json},
+      {"prior_cmd", prior_cmd},
+      {"prior_timeout", prior_timeout},
+      {"priors", priors.string()},
+      {"panorama_width", panorama_width},
+      {"iterations", optional(iterations)},
+      {"depth_weight", optional(depth_weight)},
+      {"warp_depth", expansion_json["warp_depth"]},
+      {"voxel_pixels", optional(voxel_pixels)},
+      {"converge_on", converge_on ? nlohmann::json(ConvergeOnName(*converge_on))
+                                  : nlohmann::json()},
+      {"convergence", convergence.ToJson()},
+      {"resume", resume},
+      {"deterministic", deterministic},
+      {"checkpoint_every", checkpoint_every},
+      {"validate_every", validate_every},
+      {"log_every", log_every},
+      {"time_budget", time_budget}};
 }
 
 FitInput FitInputOf(const WorkspaceFrames& frames) {
-  return {frames.depth_source, static_cast<int>(frames.train.size())};
+  return {frames.depth_source, static_cast<int>(frames.train.size()),
+          static_cast<int>(frames.val.size())};
 }
 
 int ScheduleIterations(int train_frames) {
@@ -95,6 +101,9 @@ int ScheduleIterations(int train_frames) {
 
 FitOptions ResolveFitOptions(FitOptions o, const FitInput& input) {
   const bool dataset_depth = input.depth_source == kDepthFromDataset;
+  if (!o.converge_on)
+    o.converge_on = o.iterations ? ConvergeOn::kOff : ConvergeOn::kAuto;
+  o.converge_on = ResolveConvergeOn(*o.converge_on, input.val_frames > 0);
   if (!o.iterations) o.iterations = ScheduleIterations(input.train_frames);
   if (!o.voxel_pixels) {
     o.voxel_pixels =
@@ -115,7 +124,8 @@ nlohmann::json ResumeFingerprint(const FitOptions& used) {
   nlohmann::json j = used.ToJson();
   for (const char* conduct :
        {"resume", "deterministic", "checkpoint_every", "validate_every",
-        "log_every", "time_budget", "panorama_width", "prior_timeout",
+        "log_every", "time_budget", "converge_on", "convergence",
+        "panorama_width", "prior_timeout",
         // What the priors hold is in the views' fingerprint, not where.
         "priors"})
     j.erase(conduct);

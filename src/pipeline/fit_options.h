@@ -19,6 +19,7 @@
 #include "src/gs/trainer.h"
 #include "src/pano/expansion.h"
 #include "src/pano/prior.h"
+#include "src/pipeline/convergence.h"
 
 namespace pano4d {
 
@@ -52,6 +53,11 @@ struct FitOptions {
   std::optional<double> depth_weight;
   std::optional<WarpDepth> warp_depth;
   std::optional<double> voxel_pixels;  // the initialisation's voxel
+  // The convergence stop (convergence.h): unset, kAuto when `iterations`
+  // is unset and kOff when it is given (a length asked for runs to its
+  // end); resolved to kValidation, kTraining or kOff.
+  std::optional<ConvergeOn> converge_on;
+  ConvergenceOptions convergence;
 
   // How the run goes; none of these changes what it computes.
   bool resume = false;  // from WS/pano4d/checkpoints/fit.ckpt when there
@@ -73,6 +79,7 @@ struct FitOptions {
 struct FitInput {
   std::string depth_source;  // a kDepthFrom* of src/core/frames.h
   int train_frames = 0;
+  int val_frames = 0;
 };
 FitInput FitInputOf(const WorkspaceFrames& frames);
 
@@ -106,7 +113,9 @@ inline constexpr double kEstimatedDepthVoxelPixels = 4.0;
 //   warp depth: the frames' own depth where the dataset gives it, rendered
 //     depth on estimated depth (stereo has holes and errors at the edges a
 //     warp needs most; not measured there);
-//   voxel: kGivenDepthVoxelPixels or kEstimatedDepthVoxelPixels.
+//   voxel: kGivenDepthVoxelPixels or kEstimatedDepthVoxelPixels;
+//   convergence stop: as FitOptions::converge_on says, kAuto resolved by
+//     whether there are validation frames (ResolveConvergeOn).
 // Measured in docs/experiments/2026-11-23-depth-weight-5-on-dataset-depth.md,
 // 2026-11-24-warp-given-depth-and-refine-outside-3.md and
 // 2026-12-02-budget-and-schedule.md.
@@ -115,7 +124,8 @@ FitOptions ResolveFitOptions(FitOptions given, const FitInput& input);
 // What a resumed fit must share with the run that wrote its checkpoint:
 // every option of `used` (ResolveFitOptions' result) that changes the
 // result; the run's conduct (resume, checkpoint and log intervals, the time
-// budget) may change.
+// budget, the convergence stop: where it ends, not what a step computes)
+// may change.
 nlohmann::json ResumeFingerprint(const FitOptions& used);
 
 }  // namespace pano4d

@@ -28,6 +28,8 @@ const char* FitTerminationName(FitTermination t) {
       return "time budget";
     case FitTermination::kStopped:
       return "stopped";
+    case FitTermination::kConverged:
+      return "converged";
   }
   return "unknown";
 }
@@ -54,6 +56,10 @@ std::string FitSummary::FullReport() const {
   if (termination == FitTermination::kTimeBudget)
     s += " (stopped by the time budget)";
   if (termination == FitTermination::kStopped) s += " (stopped)";
+  if (termination == FitTermination::kConverged) {
+    s += " (converged on " + convergence.value("signal", std::string()) + ": " +
+         convergence.value("reason", std::string()) + ")";
+  }
   s += StringPrintf("\n  %-22s static %zu, dynamic %zu, motion bases %d\n",
                     "Gaussians", static_gaussians, dynamic_gaussians,
                     motion_bases);
@@ -104,6 +110,14 @@ std::string FitSummary::FullReport() const {
         Value(Mean(e, "ssim")).c_str(), Value(Mean(e, "mpsnr")).c_str(),
         Value(Mean(e, "mssim")).c_str(), Value(Mean(e, "upsnr")).c_str(),
         Value(Mean(e, "ussim")).c_str(), val_frames);
+    if (e.floor && Mean(e, "upsnr")) {
+      std::optional<double> floor_upsnr;
+      for (std::size_t i = 0; i < kNumMetrics; ++i)
+        if (std::string(kMetricKeys[i]) == "upsnr")
+          floor_upsnr = e.floor->mean[i];
+      s += StringPrintf("  %-22s uPSNR %s (the mean training colour's)\n",
+                        "floor", Value(floor_upsnr).c_str());
+    }
     s += StringPrintf("  %-22s %s\n", "metrics",
                       workspace.metrics_json().c_str());
   }
@@ -120,6 +134,7 @@ nlohmann::json FitSummary::ToJson() const {
   return {
       {"iterations", iterations},
       {"termination", FitTerminationName(termination)},
+      {"convergence", convergence},
       {"resumed_at", resumed_at},
       {"stopped_by_time_budget", termination == FitTermination::kTimeBudget},
       {"deterministic", used.deterministic},

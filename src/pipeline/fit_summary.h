@@ -22,6 +22,7 @@ enum class FitTermination {
   kIterationsDone,  // every iteration ran
   kTimeBudget,      // FitOptions::time_budget ran out (checkpointed)
   kStopped,         // FitController::Stop() was called (checkpointed)
+  kConverged,       // the convergence stop (convergence.h) ended it
 };
 const char* FitTerminationName(FitTermination t);  // "iterations done", ...
 
@@ -42,6 +43,9 @@ struct FitSummary {
   Workspace workspace;
 
   std::int64_t iterations = 0;  // done, in all
+  // The convergence stop: signal, gate, samples [[iteration, PSNR], ...]
+  // and reason (empty unless kConverged); null when it was off.
+  nlohmann::json convergence;
   std::int64_t resumed_at = 0;  // 0: not resumed
   InitReport init;              // empty when resumed
   std::size_t static_gaussians = 0, dynamic_gaussians = 0;

@@ -331,7 +331,17 @@ ReportSummary WriteReport(const Workspace& ws) {
   md << "# pano4d report\n\n" << InputSection(ws, plan, fit, frames);
   md << "## Stages\n\n" << PlanTable(plan) << "\n";
   if (evaluated) md << MetricsSection(ws, frames, summary.dir);
-  md << "## Error against run time\n\n![fit](fit.png)\n\n";
+  md << "## Error against run time\n\n![fit](fit.png)\n\n"
+     << "The fit ran " << fit.value("iterations", 0) << " iterations ("
+     << fit.value("termination", std::string("?")) << ")";
+  const nlohmann::json convergence = fit.value("convergence", nlohmann::json());
+  if (fit.value("termination", std::string()) == "converged" &&
+      convergence.is_object()) {
+    md << ": the convergence stop on the "
+       << convergence.value("signal", std::string("?")) << " PSNR, "
+       << convergence.value("reason", std::string());
+  }
+  md << ".\n\n";
   md << "## Validation views\n\nGround truth, render, and the error x"
      << kErrorGain
      << " on the covisible pixels (unseen pixels grey). Video: "

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "src/core/timer.h"
 #include "src/render/blend_kernel.h"
 
 namespace pano4d {
@@ -335,12 +336,12 @@ void SumEntryGradients(const RasterStateT<T>& state,
 }  // namespace
 
 template <typename T>
-void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
-                               const RasterStateT<T>& state,
-                               const RenderOutputT<T>& out,
-                               const RenderGradientsT<T>& d_out,
-                               std::vector<T>* entry_grads,
-                               ProjectedGradientsT<T>* grad) {
+std::uint64_t RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
+                                        const RasterStateT<T>& state,
+                                        const RenderOutputT<T>& out,
+                                        const RenderGradientsT<T>& d_out,
+                                        std::vector<T>* entry_grads,
+                                        ProjectedGradientsT<T>* grad) {
   const int width = state.width, height = state.height;
   const std::vector<std::uint32_t>& ids = state.sorted_ids;
   const std::vector<std::uint32_t>& ranges = state.tile_ranges;
@@ -350,6 +351,7 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
   // Every entry's gradient is written below (zero where the entry did not
   // blend), so the buffer is only sized.
   entry_grads->resize(kPer * ids.size());
+  std::uint64_t evaluations = 0;
 
   // Gaussian-major, back to front, as the forward: each Gaussian updates
   // the pixels of its box (BoxInTile) whose last contributor lies beyond it,
@@ -358,7 +360,7 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
   // lane sums its own share of the Gaussian's gradient and the lanes are
   // added in a fixed order. A tile's entries are its own: tiles run in
   // parallel without sharing a gradient slot.
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     constexpr int kTilePixels = kTileSize * kTileSize;
     alignas(64) T t[kTilePixels], t_final[kTilePixels],
@@ -389,10 +391,113 @@ void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
         std::fill(e, e + kPer, T(0));
         continue;
       }
+      evaluations += static_cast<std::uint64_t>(box.y1 - box.y0 + 1) *
+                     (box.group1 - box.group0 + 1) * kLaneGroup;
       BackwardGaussian(p, g, k, box, rect, b, e);
     }
   }
   SumEntryGradients(state, *entry_grads, grad);
+  return evaluations;
+}
+
+namespace {
+
+// kProbeGaussians Gaussians over tile 0 of a one-tile image: wide (alpha
+// about 0.018 at the corners, above kMinAlpha) and faint (transmittance
+// 0.3 after all of them, far above kMinTransmittance), so that every pair
+// blends and no pixel stops.
+ProjectedGaussiansT<float> ProbeGaussians() {
+  ProjectedGaussiansT<float> p;
+  p.Resize(kProbeGaussians);
+  for (int g = 0; g < kProbeGaussians; ++g) {
+    p.x[g] = 8.0f + 0.01f * g;
+    p.y[g] = 8.0f - 0.01f * g;
+    p.conic_a[g] = p.conic_c[g] = 1e-3f;
+    p.conic_b[g] = 1e-4f;
+    p.opacity[g] = 0.02f;
+    p.r[g] = p.g[g] = p.b[g] = 0.5f;
+    p.depth[g] = 1.0f + g;
+    p.extent_x[g] = p.extent_y[g] = 64.0f;
+  }
+  return p;
+}
+
+// Forward pairs blended in `min_seconds` (at least one pass), and the
+// sum of the outputs (kept so that the work is not optimised away).
+std::uint64_t ProbeForward(const ProjectedGaussiansT<float>& p,
+                           double min_seconds, float* sink) {
+  const TileRect<float> rect(0, 1, kTileSize, kTileSize);
+  TileBox box;
+  BoxInTile(p, 0, 0, kTileSize, 0, kTileSize, &box);
+  std::uint64_t pairs = 0;
+  const Timer timer;
+  do {
+    ForwardTile<float> f(rect, 0);
+    for (std::uint32_t g = 0; g < kProbeGaussians; ++g)
+      f.Blend(p, g, g, box, rect);
+    *sink += f.cr[0] + f.t[kTileSize * kTileSize - 1];
+    pairs += kProbeGaussians * kTileSize * kTileSize;
+  } while (timer.WallSeconds() < min_seconds);
+  return pairs;
+}
+
+std::uint64_t ProbeBackward(const ProjectedGaussiansT<float>& p,
+                            double min_seconds, float* sink) {
+  constexpr int kTilePixels = kTileSize * kTileSize;
+  alignas(64) float t[kTilePixels], t_final[kTilePixels],
+      d_acc_depth[kTilePixels], d_accumulated[kTilePixels];
+  alignas(64) float dc[3][kTilePixels], behind[3][kTilePixels],
+      behind_depth[kTilePixels];
+  alignas(64) float lane_sum[kPer][kTileSize];
+  alignas(64) std::uint32_t last[kTilePixels];
+  const BackwardPixels<float> b{t,   t_final, d_acc_depth,  d_accumulated,
+                                dc,  behind,  behind_depth, lane_sum,
+                                last};
+  const TileRect<float> rect(0, 1, kTileSize, kTileSize);
+  TileBox box;
+  BoxInTile(p, 0, 0, kTileSize, 0, kTileSize, &box);
+  float e[kPer];
+  std::uint64_t pairs = 0;
+  const Timer timer;
+  do {
+    for (int i = 0; i < kTilePixels; ++i) {
+      t[i] = t_final[i] = 0.3f;
+      d_acc_depth[i] = d_accumulated[i] = 1e-3f;
+      behind_depth[i] = 0.0f;
+      last[i] = kProbeGaussians;
+      for (int c = 0; c < 3; ++c) {
+        dc[c][i] = 1e-3f;
+        behind[c][i] = 0.0f;
+      }
+    }
+    for (std::uint32_t k = kProbeGaussians; k-- > 0;) {
+      BackwardGaussian(p, k, k, box, rect, b, e);
+      *sink += e[0] + e[5];
+    }
+    pairs += kProbeGaussians * kTilePixels;
+  } while (timer.WallSeconds() < min_seconds);
+  return pairs;
+}
+
+}  // namespace
+
+BlendCeiling ProbeBlendCeiling(int threads, double min_seconds) {
+  const ProjectedGaussiansT<float> p = ProbeGaussians();
+  BlendCeiling c;
+  float sink = 0;
+  for (const bool forward : {true, false}) {
+    std::uint64_t pairs = 0;
+    const Timer timer;
+#pragma omp parallel num_threads(threads) reduction(+ : pairs, sink)
+    pairs += forward ? ProbeForward(p, min_seconds, &sink)
+                     : ProbeBackward(p, min_seconds, &sink);
+    const double rate = pairs / timer.WallSeconds();
+    (forward ? c.forward_pairs_per_s : c.backward_pairs_per_s) = rate;
+  }
+  // An empty asm that reads `sink` keeps the compiler from dropping the
+  // probes' work (what benchmark::DoNotOptimize does).
+  asm volatile("" : : "r,m"(sink) : "memory");
+  return c;
 }
 
 template std::uint64_t RasterizeToPixelsForward(const RasterSettingsT<float>&,
@@ -401,17 +506,15 @@ template std::uint64_t RasterizeToPixelsForward(const RasterSettingsT<float>&,
 template std::uint64_t RasterizeToPixelsForward(const RasterSettingsT<double>&,
                                                 RasterStateT<double>*,
                                                 RenderOutputT<double>*);
-template void RasterizeToPixelsBackward(const RasterSettingsT<float>&,
-                                        const RasterStateT<float>&,
-                                        const RenderOutputT<float>&,
-                                        const RenderGradientsT<float>&,
-                                        std::vector<float>*,
-                                        ProjectedGradientsT<float>*);
-template void RasterizeToPixelsBackward(const RasterSettingsT<double>&,
-                                        const RasterStateT<double>&,
-                                        const RenderOutputT<double>&,
-                                        const RenderGradientsT<double>&,
-                                        std::vector<double>*,
-                                        ProjectedGradientsT<double>*);
+template std::uint64_t RasterizeToPixelsBackward(const RasterSettingsT<float>&,
+                                                 const RasterStateT<float>&,
+                                                 const RenderOutputT<float>&,
+                                                 const RenderGradientsT<float>&,
+                                                 std::vector<float>*,
+                                                 ProjectedGradientsT<float>*);
+template std::uint64_t RasterizeToPixelsBackward(
+    const RasterSettingsT<double>&, const RasterStateT<double>&,
+    const RenderOutputT<double>&, const RenderGradientsT<double>&,
+    std::vector<double>*, ProjectedGradientsT<double>*);
 
 }  // namespace pano4d

@@ -24,13 +24,26 @@ std::uint64_t RasterizeToPixelsForward(const RasterSettingsT<T>& settings,
 // with respect to the forward's outputs `out` (sizes checked by the
 // caller, RasterizerT::Backward). `entry_grads` is scratch. Deterministic
 // whatever the thread count: per-entry gradients are reduced in entry
-// order.
+// order. Returns the (Gaussian, pixel) pairs evaluated.
 template <typename T>
-void RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
-                               const RasterStateT<T>& state,
-                               const RenderOutputT<T>& out,
-                               const RenderGradientsT<T>& d_out,
-                               std::vector<T>* entry_grads,
-                               ProjectedGradientsT<T>* grad);
+std::uint64_t RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
+                                        const RasterStateT<T>& state,
+                                        const RenderOutputT<T>& out,
+                                        const RenderGradientsT<T>& d_out,
+                                        std::vector<T>* entry_grads,
+                                        ProjectedGradientsT<T>* grad);
+
+// The blend's ceiling on this machine: its own lane loops (forward and
+// backward, float) run over one tile and kProbeGaussians Gaussians that
+// cover it and never stop a pixel, everything in L1: no gathers from
+// memory, no partial boxes, no early termination. (Gaussian, pixel) pairs
+// per second on `threads` threads, each its own tile, over at least
+// `min_seconds`. A render's blend throughput over this says what its
+// memory traffic, boxes and stops cost.
+inline constexpr int kProbeGaussians = 64;
+struct BlendCeiling {
+  double forward_pairs_per_s = 0, backward_pairs_per_s = 0;
+};
+BlendCeiling ProbeBlendCeiling(int threads, double min_seconds);
 
 }  // namespace pano4d

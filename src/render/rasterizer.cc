@@ -105,7 +105,8 @@ RasterBackwardStats RasterizerT<T>::Backward(const GaussianModelT<T>& model,
                    std::to_string(state.gaussians()));
   RasterBackwardStats stats;
   Timer timer;
-  RasterizeBackward(camera, settings, state, out, d_out, &grad2d_);
+  stats.pixel_evaluations =
+      RasterizeBackward(camera, settings, state, out, d_out, &grad2d_);
   stats.blend_ms = 1e3 * timer.WallSeconds();
   timer.Restart();
   ProjectionBackward(model, camera, state.projected, grad2d_, grad);
@@ -135,14 +136,13 @@ void RasterizerT<T>::RasterizeForward(const ProjectedGaussiansT<T>& projected,
 }
 
 template <typename T>
-void RasterizerT<T>::RasterizeBackward(const RasterCameraT<T>& camera,
-                                       const RasterSettingsT<T>& settings,
-                                       const RasterStateT<T>& state,
-                                       const RenderOutputT<T>& out,
-                                       const RenderGradientsT<T>& d_out,
-                                       ProjectedGradientsT<T>* grad2d) {
+std::uint64_t RasterizerT<T>::RasterizeBackward(
+    const RasterCameraT<T>& camera, const RasterSettingsT<T>& settings,
+    const RasterStateT<T>& state, const RenderOutputT<T>& out,
+    const RenderGradientsT<T>& d_out, ProjectedGradientsT<T>* grad2d) {
   CheckBackwardInputs(camera, state, out, d_out);
-  RasterizeToPixelsBackward(settings, state, out, d_out, &entry_grads_, grad2d);
+  return RasterizeToPixelsBackward(settings, state, out, d_out, &entry_grads_,
+                                   grad2d);
 }
 
 template class RasterizerT<float>;

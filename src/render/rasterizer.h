@@ -104,6 +104,7 @@ struct RasterStats {
 // Wall time of a backward's stages, milliseconds.
 struct RasterBackwardStats {
   double blend_ms = 0, project_ms = 0;
+  std::uint64_t pixel_evaluations = 0;  // (Gaussian, pixel) pairs
 };
 
 // What a forward pass saves for its backward (gsplat's saved tensors).
@@ -201,12 +202,13 @@ class RasterizerT {
                         const RasterCameraT<T>& camera,
                         const RasterSettingsT<T>& settings,
                         RenderOutputT<T>* out, RasterStateT<T>* state);
-  void RasterizeBackward(const RasterCameraT<T>& camera,
-                         const RasterSettingsT<T>& settings,
-                         const RasterStateT<T>& state,
-                         const RenderOutputT<T>& out,
-                         const RenderGradientsT<T>& d_out,
-                         ProjectedGradientsT<T>* grad2d);
+  // Returns the backward's (Gaussian, pixel) pairs.
+  std::uint64_t RasterizeBackward(const RasterCameraT<T>& camera,
+                                  const RasterSettingsT<T>& settings,
+                                  const RasterStateT<T>& state,
+                                  const RenderOutputT<T>& out,
+                                  const RenderGradientsT<T>& d_out,
+                                  ProjectedGradientsT<T>* grad2d);
 
  private:
   void Intersect(const RasterCameraT<T>& camera, RasterStateT<T>* state);

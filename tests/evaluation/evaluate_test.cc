@@ -69,6 +69,52 @@ TEST(EvaluateTest, ScoresEveryFrameWithMaskedAndUnseenMetrics) {
   }
 }
 
+// The floor is the training frames' mean colour painted everywhere: renders
+// that are that colour score exactly the floor, and the report sets the
+// floor's row and uPSNR beside pano4d's.
+TEST(EvaluateTest, TheMeanTrainingColourIsTheFloor) {
+  Fixture fx;
+  cv::Scalar sum = cv::Scalar::all(0);
+  double pixels = 0;
+  for (const DatasetFrame& f : fx.dataset.train) {
+    const Image image = ReadImage(f.rgb);
+    sum += cv::mean(image.mat()) * (image.width() * image.height());
+    pixels += image.width() * image.height();
+  }
+  const EvaluationResult noisy = EvaluateRenders(fx.dataset, fx.renders, {});
+  ASSERT_TRUE(noisy.floor);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(noisy.floor->rgb[c], sum[c] / pixels, 1e-9) << c;
+  const auto constant = fx.dir / "constant";
+  for (const DatasetFrame& f : fx.dataset.val) {
+    const Image truth = ReadImage(f.rgb);
+    Image image(truth.width(), truth.height());
+    image.mat().setTo(sum / pixels);
+    WriteImage(constant / (f.id + ".png"), image);
+  }
+  const EvaluationResult flat = EvaluateRenders(fx.dataset, constant, {});
+  for (std::size_t k = 0; k < kNumMetrics; ++k) {
+    ASSERT_EQ(flat.mean[k].has_value(), flat.floor->mean[k].has_value())
+        << kMetricKeys[k];
+    // The PNG rounds the colour to 8 bits where the floor's constant is
+    // quantised as a render is (QuantizeForMetrics): a few hundredths of a
+    // dB apart.
+    if (flat.mean[k])
+      EXPECT_NEAR(*flat.mean[k], *flat.floor->mean[k], 0.05) << kMetricKeys[k];
+  }
+  // The noisy renders are far above a constant colour.
+  EXPECT_GT(*noisy.mean[6], *noisy.floor->mean[6] + 5);  // upsnr
+  const std::string markdown = WriteEvaluation(noisy, fx.dir / "m", kMeta);
+  EXPECT_NE(markdown.find("| mean training colour (floor) |"),
+            std::string::npos);
+  EXPECT_NE(markdown.find("uPSNR against the floor of the mean training "
+                          "colour: "),
+            std::string::npos);
+  const Json json = ReadJson(fx.dir / "m" / "metrics.json");
+  EXPECT_NEAR(json["mean_colour_floor"]["mean"]["upsnr"].get<double>(),
+              *noisy.floor->mean[6], 1e-9);
+}
+
 TEST(EvaluateTest, JsonMarkdownAndCsvAgree) {
   Fixture fx;
   const EvaluationResult r = EvaluateRenders(fx.dataset, fx.renders, {});

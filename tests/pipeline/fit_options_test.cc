@@ -130,5 +130,33 @@ TEST(FitOptionsTest, CheckNamesTheOption) {
   EXPECT_THROW(init.Check(), Error);
 }
 
+// The convergence stop is on for the default schedule (reading the
+// validation frames when there are some) and off for a length given, unless
+// asked for.
+TEST(FitOptionsTest, TheConvergenceStopFollowsTheIterationsGiven) {
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 48, 96}).converge_on,
+            ConvergeOn::kValidation);
+  EXPECT_EQ(ResolveFitOptions({}, {kDepthFromDataset, 48, 0}).converge_on,
+            ConvergeOn::kTraining);
+  FitOptions given;
+  given.iterations = 500;
+  EXPECT_EQ(ResolveFitOptions(given, {kDepthFromDataset, 48, 96}).converge_on,
+            ConvergeOn::kOff);
+  given.converge_on = ConvergeOn::kTraining;
+  EXPECT_EQ(ResolveFitOptions(given, {kDepthFromDataset, 48, 96}).converge_on,
+            ConvergeOn::kTraining);
+  EXPECT_TRUE(FitOptions{}.ToJson().at("converge_on").is_null());
+  EXPECT_EQ(given.ToJson().at("converge_on"), "train");
+  // Where the fit ends is not what a step computes: a resume may change it.
+  const FitOptions a = ResolveFitOptions(FitOptions{}, {kDepthFromDataset});
+  FitOptions b = a;
+  b.converge_on = ConvergeOn::kOff;
+  b.convergence.window = 1000;
+  EXPECT_EQ(ResumeFingerprint(a), ResumeFingerprint(b));
+  FitOptions bad;
+  bad.convergence.every = 0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 }  // namespace
 }  // namespace pano4d

@@ -9,6 +9,7 @@
 
 #include "src/core/error.h"
 #include "src/core/json.h"
+#include "src/core/run_recorder.h"
 #include "src/datasets/synth_generate.h"
 #include "src/pipeline/depth.h"
 #include "tests/support/test_files.h"
@@ -176,6 +177,59 @@ TEST_F(FitControllerTest, ItsStampSaysWhyItRunsAgain) {
   fs::remove(ws.checkpoint());
   EXPECT_EQ(stamp.StaleReason(FitStageRecord(ws, used, inputs.train)),
             "its output pano4d/checkpoints/fit.ckpt is gone");
+}
+
+// The convergence stop ends a fit as `converged` with its reason, on the
+// validation PSNR when there are validation frames; a fit resumed from that
+// checkpoint ends at once, as the uninterrupted run did; a length given
+// without --converge-on runs to its end.
+TEST_F(FitControllerTest, AConvergedFitSaysWhyAndIterationsOverride) {
+  const Workspace ws = Listed("ws_converge");
+  FitOptions o = Short(60);
+  o.converge_on = ConvergeOn::kAuto;
+  o.trainer.strategy.densify_until = 10;
+  o.convergence.every = 10;
+  o.convergence.window = 20;
+  o.convergence.min_gain = 100;  // no window gains that much
+  const FitSummary a = RunFit(ws, o);
+  EXPECT_EQ(a.termination, FitTermination::kConverged);
+  EXPECT_EQ(a.iterations, 30);  // samples at 10, 20, 30; 30 against 10
+  EXPECT_EQ(a.used.converge_on, ConvergeOn::kValidation);
+  const Json fit = ReadJson(ws.fit_json());
+  EXPECT_EQ(fit.at("termination"), "converged");
+  EXPECT_EQ(fit.at("convergence").at("signal"), "val");
+  EXPECT_EQ(fit.at("convergence").at("gate"), 10);
+  EXPECT_EQ(fit.at("convergence").at("samples").size(), 3u);
+  const std::string reason = fit.at("convergence").at("reason");
+  EXPECT_NE(reason.find("over the last 20 iterations (less than 100"),
+            std::string::npos)
+      << reason;
+  EXPECT_NE(a.FullReport().find("(converged on val: PSNR"), std::string::npos)
+      << a.FullReport();
+  // The run log has the sample's rows with validation; the fit is complete
+  // for `run` (its stamp).
+  const RunLog log = ReadRunLog(ws.fit_csv());
+  ASSERT_FALSE(log.iterations.empty());
+  EXPECT_EQ(log.iterations.back(), 30);
+  EXPECT_TRUE(fs::exists(ws.stamps() / "fit.json"));
+  EXPECT_TRUE(fs::exists(ws.fit_plot()));
+
+  FitOptions resume = o;
+  resume.resume = true;
+  const FitSummary b = RunFit(ws, resume);
+  EXPECT_EQ(b.termination, FitTermination::kConverged);
+  EXPECT_EQ(b.resumed_at, 30);
+  EXPECT_EQ(b.iterations, 30);
+
+  FitOptions given = o;
+  given.converge_on.reset();  // --iterations 60 alone
+  const FitSummary c = RunFit(Listed("ws_converge_off"), given);
+  EXPECT_EQ(c.termination, FitTermination::kIterationsDone);
+  EXPECT_EQ(c.iterations, 60);
+  EXPECT_EQ(c.used.converge_on, ConvergeOn::kOff);
+  EXPECT_TRUE(ReadJson(Workspace(dir_->path() / "ws_converge_off").fit_json())
+                  .at("convergence")
+                  .is_null());
 }
 
 }  // namespace

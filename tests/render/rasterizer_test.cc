@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/camera.h"
+#include "src/render/rasterize_to_pixels.h"
 #include "src/render/sh.h"
 
 namespace pano4d {
@@ -339,6 +340,38 @@ TEST(RasterizerTest, ManyGaussiansOnOnePixelSaturateIt) {
   EXPECT_GT(out.alpha[centre], 1.0f - 2e-4f);
   EXPECT_NEAR(out.rgb[3 * centre + 1], 0.9f, 1e-3f);
   EXPECT_NEAR(out.depth[centre], 2.0f, 1e-3f);
+}
+
+// The blend's throughput counts (bench render): the backward walks the
+// forward's pairs where no pixel stops, and no more where pixels saturate.
+TEST(RasterizerTest, BackwardCountsTheForwardsPairsUpToTheStops) {
+  GaussianModel faint;
+  for (int i = 0; i < 5; ++i)
+    Add(&faint, {0.05f * i, 0.02f * i, 2.0f + 0.1f * i}, 0.05f, 0.1f,
+        {0.2f, 0.5f, 0.8f});
+  const GaussianModel saturating = kStiffCases[4].make();
+  const GaussianModel* models[] = {&faint, &saturating};
+  for (const GaussianModel* m : models) {
+    const GaussianModel& model = *m;
+    Rasterizer rasterizer;
+    RasterState state;
+    RenderOutput out;
+    rasterizer.Forward(model, TestCamera(), {}, &out, &state);
+    RenderGradients d_out;
+    d_out.rgb.assign(out.rgb.size(), 1e-3f);
+    GaussianGradients grad;
+    const RasterBackwardStats stats =
+        rasterizer.Backward(model, TestCamera(), {}, state, out, d_out, &grad);
+    ASSERT_GT(state.stats.pixel_evaluations, 0u);
+    if (m == &faint)
+      EXPECT_EQ(stats.pixel_evaluations, state.stats.pixel_evaluations);
+    else
+      EXPECT_LT(stats.pixel_evaluations, state.stats.pixel_evaluations);
+  }
+  const BlendCeiling c = ProbeBlendCeiling(1, 0.01);
+  EXPECT_GT(c.forward_pairs_per_s, 0);
+  EXPECT_GT(c.backward_pairs_per_s, 0);
+  EXPECT_TRUE(std::isfinite(c.forward_pairs_per_s + c.backward_pairs_per_s));
 }
 
 }  // namespace
