@@ -61,7 +61,7 @@ ConvergenceRule::ConvergenceRule(ConvergenceOptions options, std::int64_t gate)
     : options_(options), gate_(gate) {}
 
 bool ConvergenceRule::Due(std::int64_t it) const {
-  return it > 0 && it >= gate_ && it % options_.every == 0;
+  return it > gate_ && it % options_.every == 0;
 }
 
 std::optional<std::string> ConvergenceRule::Add(std::int64_t it, double psnr) {

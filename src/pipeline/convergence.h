@@ -32,7 +32,7 @@ ConvergeOn ResolveConvergeOn(ConvergeOn c, bool has_validation_frames);
 
 struct ConvergenceOptions {
   // A sample of the signal every `every` iterations, from the first
-  // multiple of `every` at or after the gate (ConvergenceGate).
+  // multiple of `every` after the gate (ConvergenceGate).
   int every = 250;
   // Stop when the signal at iteration i is less than min_gain dB above
   // its sample at i - window. On Balloon1 the held-out PSNR gains 0.10 dB
@@ -45,9 +45,10 @@ struct ConvergenceOptions {
   nlohmann::json ToJson() const;
 };
 
-// The first iteration whose sample may count: after every structural change
-// of the schedule, the last expansion step (0: none) and the end of
-// densification, so that a window never spans one.
+// The iteration after which samples are taken: that of the last
+// structural change of the schedule, the last expansion step (0: none; it
+// runs after that iteration's sample would be taken) or the end of
+// densification, so that no window spans one.
 std::int64_t ConvergenceGate(std::int64_t last_expansion_iteration,
                              std::int64_t densify_until);
 

@@ -17,12 +17,12 @@ ConvergenceOptions Every100Window200(double min_gain) {
   return o;
 }
 
-// Samples start at the gate; the stop compares a sample with the one a
+// Samples start after the gate; the stop compares a sample with the one a
 // window before it and says why it stopped.
 TEST(ConvergenceTest, StopsWhenTheWindowGainedLessThanTheMinimum) {
-  ConvergenceRule rule(Every100Window200(0.1), 250);
+  ConvergenceRule rule(Every100Window200(0.1), 200);
   EXPECT_FALSE(rule.Due(100));  // before the gate
-  EXPECT_FALSE(rule.Due(250));  // not a multiple of every
+  EXPECT_FALSE(rule.Due(200));  // the gate itself: before its change
   EXPECT_FALSE(rule.Due(350));
   EXPECT_TRUE(rule.Due(300));
   EXPECT_FALSE(rule.Add(300, 20.0));

@@ -193,7 +193,7 @@ TEST_F(FitControllerTest, AConvergedFitSaysWhyAndIterationsOverride) {
   o.convergence.min_gain = 100;  // no window gains that much
   const FitSummary a = RunFit(ws, o);
   EXPECT_EQ(a.termination, FitTermination::kConverged);
-  EXPECT_EQ(a.iterations, 30);  // samples at 10, 20, 30; 30 against 10
+  EXPECT_EQ(a.iterations, 40);  // samples after 10: 20, 30, 40 against 20
   EXPECT_EQ(a.used.converge_on, ConvergeOn::kValidation);
   const Json fit = ReadJson(ws.fit_json());
   EXPECT_EQ(fit.at("termination"), "converged");
@@ -210,7 +210,7 @@ TEST_F(FitControllerTest, AConvergedFitSaysWhyAndIterationsOverride) {
   // for `run` (its stamp).
   const RunLog log = ReadRunLog(ws.fit_csv());
   ASSERT_FALSE(log.iterations.empty());
-  EXPECT_EQ(log.iterations.back(), 30);
+  EXPECT_EQ(log.iterations.back(), 40);
   EXPECT_TRUE(fs::exists(ws.stamps() / "fit.json"));
   EXPECT_TRUE(fs::exists(ws.fit_plot()));
 
@@ -218,8 +218,8 @@ TEST_F(FitControllerTest, AConvergedFitSaysWhyAndIterationsOverride) {
   resume.resume = true;
   const FitSummary b = RunFit(ws, resume);
   EXPECT_EQ(b.termination, FitTermination::kConverged);
-  EXPECT_EQ(b.resumed_at, 30);
-  EXPECT_EQ(b.iterations, 30);
+  EXPECT_EQ(b.resumed_at, 40);
+  EXPECT_EQ(b.iterations, 40);
 
   FitOptions given = o;
   given.converge_on.reset();  // --iterations 60 alone
