@@ -107,8 +107,10 @@ std::vector<BenchScene> FindBenchScenes(const std::filesystem::path& root,
                                         const std::vector<std::string>& names);
 
 // `EXE run --dataset SCENE --workspace WS --eval --factor F
-// [--iterations N] [--lpips-weights W] [--priors P]`, at the scene's
-// protocol factor (Kubric-4D 1, the others 2), paths absolute; P is
+// [--iterations N | --converge-on train] [--lpips-weights W] [--priors P]`,
+// at the scene's protocol factor (Kubric-4D 1, the others 2), paths
+// absolute; without N the convergence stop reads the training frames, so
+// that the frames a table scores never choose where a fit ends; P is
 // priors_root/<scene> when that folder holds learned priors (a root of
 // scene folders that carry their own priors may be the data root itself).
 // Throws pano4d::Error when the scene cannot be read.

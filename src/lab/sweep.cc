@@ -45,6 +45,7 @@ const std::map<std::string, bool>& SweepRunFlags() {
       {"--eval", false},
       {"--factor", true},
       {"--iterations", true},
+      {"--converge-on", true},
       {"--lpips-weights", true},
       {"--priors", true},
       {"--seed", true},
