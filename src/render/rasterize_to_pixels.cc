@@ -239,12 +239,8 @@ template <typename T>
   const T gx = p.x[g], ca = p.conic_a[g], cb = p.conic_b[g], cc = p.conic_c[g];
   const T op = p.opacity[g], z = p.depth[g];
   const T red = p.r[g], green = p.g[g], blue = p.b[g];
-  // Only the lanes of the box's groups get a share: the others are neither
-  // cleared nor summed (zeros would not change the sums).
-  const int lane_begin = box.group0 * kLaneGroup;
-  const int lane_end = (box.group1 + 1) * kLaneGroup;
   for (int f = 0; f < kPer; ++f)
-    std::fill(lane_sum[f] + lane_begin, lane_sum[f] + lane_end, T(0));
+    std::fill(lane_sum[f], lane_sum[f] + kTileSize, T(0));
   for (int py = box.y0; py <= box.y1; ++py) {
     const T dy = py + T(0.5) - p.y[g];
     const ConicRow<T> conic(ca, cb, cc, dy);
@@ -306,8 +302,7 @@ template <typename T>
   }
   for (int f = 0; f < kPer; ++f) {
     T sum = 0;
-    for (int lane = lane_begin; lane < lane_end; ++lane)
-      sum += lane_sum[f][lane];
+    for (int lane = 0; lane < kTileSize; ++lane) sum += lane_sum[f][lane];
     e[f] = sum;
   }
 }
