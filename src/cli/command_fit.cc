@@ -29,6 +29,8 @@ int RunFitCommand(const FitCommandOptions& o) {
   const FolderLock lock = LockWorkspace(o.workspace);
   const Workspace ws(o.workspace);
   RemoveLeftoverTemporaries(ws.root());
+  // Bad options are refused before --force moves the previous fit aside.
+  o.fit.Check();
   std::filesystem::path backup;
   if (!o.fit.resume && std::filesystem::exists(ws.checkpoint())) {
     if (!o.force) {

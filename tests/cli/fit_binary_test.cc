@@ -62,6 +62,38 @@ class FitBinaryTest : public ::testing::Test {
 };
 testing::TempDir* FitBinaryTest::dir_ = nullptr;
 
+// --converge-on with --iterations: the stop ends the fit as `converged`
+// and says why; bad values are refused naming the flag.
+TEST_F(FitBinaryTest, TheConvergenceStopEndsAFitAndSaysWhy) {
+  const fs::path ws = Workspace("ws_converge");
+  const fs::path log = ws / "fit.log";
+  const std::string fit = "fit --workspace '" + ws.string() +
+                          "' --iterations 100 --converge-on val "
+                          "--converge-every 10 --converge-window 20 ";
+  ASSERT_EQ(RunPano4d(fit + "--converge-min-gain 100", log), 0) << Slurp(log);
+  const nlohmann::json summary =
+      nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
+  // Densification ends at 50: samples at 60, 70, 80; 80 against 60.
+  EXPECT_EQ(summary.at("iterations").get<int>(), 80);
+  EXPECT_EQ(summary.at("termination"), "converged");
+  EXPECT_NE(Slurp(log).find("fit: converged at iteration 80: val PSNR"),
+            std::string::npos)
+      << Slurp(log);
+  EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --force --converge-on sometimes",
+                      log),
+            64);
+  EXPECT_EQ(RunPano4d("fit --workspace '" + ws.string() +
+                          "' --force --converge-every 10 --converge-window 25",
+                      log),
+            1);
+  EXPECT_NE(Slurp(log).find("--converge-window"), std::string::npos)
+      << Slurp(log);
+  // Refused before --force touched the fit.
+  EXPECT_TRUE(fs::exists(ws / "pano4d/fit.json"));
+  EXPECT_FALSE(fs::exists(ws / "pano4d/previous_fit"));
+}
+
 TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
   const fs::path ws = Workspace("ws_outputs");
   const fs::path log = ws / "fit.log";
@@ -81,6 +113,9 @@ TEST_F(FitBinaryTest, WritesCheckpointRunLogRendersAndMetrics) {
   const nlohmann::json fit =
       nlohmann::json::parse(Slurp(ws / "pano4d/fit.json"));
   EXPECT_EQ(fit.at("iterations").get<int>(), 40);
+  // --iterations alone runs to its end: the convergence stop is off.
+  EXPECT_EQ(fit.at("options_used").at("converge_on"), "off");
+  EXPECT_TRUE(fit.at("convergence").is_null());
   // The dataset gives the depth, so the depth loss has its given-depth
   // weight (--depth-weight not passed).
   const nlohmann::json frames =
