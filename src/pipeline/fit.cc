@@ -411,7 +411,7 @@ class FitRun {
   FitSummary summary_;
   ExpansionState ex_;
   std::optional<ConvergenceRule> rule_;
-  QuickMetrics validated_;  // at validated_at, by RecordIteration
+  QuickMetrics validated_;  // at validated_at_, by RecordIteration
   std::int64_t validated_at_ = -1;
   LossWindow window_;
   Timer total_;
@@ -533,6 +533,11 @@ void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
 // checkpoint, and one that had converged there ends at once.
 void FitRun::StartConvergence(const Trainer& trainer, bool resuming) {
   if (o_.converge_on == ConvergeOn::kOff) return;
+  if (o_.converge_on == ConvergeOn::kValidation && inputs_.val.empty()) {
+    throw Error("--converge-on", "", "val",
+                "the workspace has no validation frames to read; use train "
+                "(or auto)");
+  }
   std::int64_t last_expansion = 0;
   if (ex_.expansion) {
     last_expansion = o_.expansion.one_step

@@ -221,6 +221,15 @@ TEST_F(FitControllerTest, AConvergedFitSaysWhyAndIterationsOverride) {
   EXPECT_EQ(b.resumed_at, 40);
   EXPECT_EQ(b.iterations, 40);
 
+  // The validation signal where there are no validation frames: refused.
+  FitInputs no_val = LoadFitInputs(ws);
+  no_val.val.clear();
+  FitOptions val = o;
+  val.converge_on = ConvergeOn::kValidation;
+  EXPECT_THROW(
+      FitController(Listed("ws_converge_noval"), val, std::move(no_val)).Run(),
+      Error);
+
   FitOptions given = o;
   given.converge_on.reset();  // --iterations 60 alone
   const FitSummary c = RunFit(Listed("ws_converge_off"), given);
