@@ -99,8 +99,9 @@ TEST(EvaluateTest, TheMeanTrainingColourIsTheFloor) {
     // The PNG rounds the colour to 8 bits where the floor's constant is
     // quantised as a render is (QuantizeForMetrics): a few hundredths of a
     // dB apart.
-    if (flat.mean[k])
+    if (flat.mean[k]) {
       EXPECT_NEAR(*flat.mean[k], *flat.floor->mean[k], 0.05) << kMetricKeys[k];
+    }
   }
   // The noisy renders are far above a constant colour.
   EXPECT_GT(*noisy.mean[6], *noisy.floor->mean[6] + 5);  // upsnr

@@ -363,10 +363,11 @@ TEST(RasterizerTest, BackwardCountsTheForwardsPairsUpToTheStops) {
     const RasterBackwardStats stats =
         rasterizer.Backward(model, TestCamera(), {}, state, out, d_out, &grad);
     ASSERT_GT(state.stats.pixel_evaluations, 0u);
-    if (m == &faint)
+    if (m == &faint) {
       EXPECT_EQ(stats.pixel_evaluations, state.stats.pixel_evaluations);
-    else
+    } else {
       EXPECT_LT(stats.pixel_evaluations, state.stats.pixel_evaluations);
+    }
   }
   const BlendCeiling c = ProbeBlendCeiling(1, 0.01);
   EXPECT_GT(c.forward_pairs_per_s, 0);
