@@ -155,12 +155,11 @@ struct MaskCounts {
   int with_mask = 0, empty_covisible = 0, empty_unseen = 0;
 };
 
-// One frame's metrics: on every pixel, and with a covisible mask on the
-// covisible (m*) and unseen (u*) pixels.
-FrameMetrics ScoreFrame(const DatasetFrame& f, const Image& render,
-                        const fs::path& render_path,
+// One frame's metrics (`truth` is f.rgb read): on every pixel, and with a
+// covisible mask on the covisible (m*) and unseen (u*) pixels.
+FrameMetrics ScoreFrame(const DatasetFrame& f, const Image& truth,
+                        const Image& render, const fs::path& render_path,
                         const std::optional<Lpips>& lpips, MaskCounts* counts) {
-  const Image truth = ReadImage(f.rgb);
   if (render.width() != truth.width() || render.height() != truth.height()) {
     throw Error(render_path.string(), "size", Size(render),
                 "expected " + Size(truth) + " like " + f.rgb.string());
@@ -263,7 +262,7 @@ std::optional<MeanColourFloor> ScoreMeanColour(
     const Image truth = ReadImage(f.rgb);
     Image constant(truth.width(), truth.height());
     constant.mat().setTo(cv::Scalar((*rgb)[0], (*rgb)[1], (*rgb)[2]));
-    scored.push_back(ScoreFrame(f, constant, "the mean training colour",
+    scored.push_back(ScoreFrame(f, truth, constant, "the mean training colour",
                                 std::nullopt, &ignored));
   }
   floor.mean = MeanOver(scored, nullptr);
@@ -347,7 +346,8 @@ EvaluationResult EvaluateRenders(const Dataset& dataset,
                        static_cast<std::int64_t>(frames.size()));
   MaskCounts counts;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    result.frames.push_back(ScoreFrame(frames[i], ReadImage(render_paths[i]),
+    result.frames.push_back(ScoreFrame(frames[i], ReadImage(frames[i].rgb),
+                                       ReadImage(render_paths[i]),
                                        render_paths[i], lpips, &counts));
     progress.Add();
   }

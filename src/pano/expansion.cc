@@ -244,6 +244,12 @@ std::vector<int> StepsDueAt(const ExpansionOptions& o, std::int64_t iteration,
   return due;
 }
 
+std::int64_t LastExpansionIteration(const ExpansionOptions& o, int iterations) {
+  const std::int64_t expansions = (iterations - 1) / o.every;
+  if (expansions == 0) return 0;
+  return o.one_step ? o.every : expansions * o.every;
+}
+
 int LastStepBefore(const ExpansionOptions& o, std::int64_t before,
                    int iterations) {
   int last = 0;

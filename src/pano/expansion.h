@@ -79,6 +79,9 @@ struct ExpansionOptions {
 // expansion after `iteration` iterations (empty when none is due).
 std::vector<int> StepsDueAt(const ExpansionOptions& options,
                             std::int64_t iteration, int iterations);
+// The iteration of the run's last expansion (0: none).
+std::int64_t LastExpansionIteration(const ExpansionOptions& options,
+                                    int iterations);
 // The last step that ran before iteration `before` (0: none): where a fit
 // resumed at `before` continues the expansion from.
 int LastStepBefore(const ExpansionOptions& options, std::int64_t before,

@@ -396,11 +396,11 @@ class FitRun {
   void RunDueExpansions(Trainer* trainer);
   void CarveIfDue(Trainer* trainer);
   void StartConvergence(const Trainer& trainer, bool resuming);
-  void RecordIteration(Trainer* trainer, RunRecorder* recorder,
-                       ProgressBar* bar);
-  bool Converged(Trainer* trainer);
+  QuickMetrics RecordIteration(Trainer* trainer, RunRecorder* recorder,
+                               ProgressBar* bar);
+  bool Converged(Trainer* trainer, const QuickMetrics& validated);
   void SaveCheckpoint(Trainer* trainer);
-  bool StopsEarly(Trainer* trainer);
+  bool StopsEarly(Trainer* trainer, const QuickMetrics& validated);
   void WriteProducts(Trainer* trainer);
 
   const Workspace& ws_;
@@ -411,8 +411,6 @@ class FitRun {
   FitSummary summary_;
   ExpansionState ex_;
   std::optional<ConvergenceRule> rule_;
-  QuickMetrics validated_;  // at validated_at_, by RecordIteration
-  std::int64_t validated_at_ = -1;
   LossWindow window_;
   Timer total_;
 };
@@ -492,9 +490,10 @@ void FitRun::CarveIfDue(Trainer* trainer) {
 }
 
 // The run log's row and the progress bar's status every --log-every
-// iterations, with validation every --validate-every and at the end.
-void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
-                             ProgressBar* bar) {
+// iterations, with validation every --validate-every and at the end;
+// returns the validation's metrics (none when it did not validate).
+QuickMetrics FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
+                                     ProgressBar* bar) {
   const std::vector<ValidationView>& val = inputs_.val;
   const std::int64_t it = trainer->iteration();
   // A convergence sample gets a row (the plot marks a stop there), and
@@ -504,15 +503,13 @@ void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
       !val.empty() && (it % o_.validate_every == 0 || trainer->Done() ||
                        (sample && o_.converge_on == ConvergeOn::kValidation));
   if (it % o_.log_every != 0 && !validate && !trainer->Done() && !sample)
-    return;
+    return {};
   QuickMetrics q;
   if (validate) {
     Timer t;
     q = Validate(trainer, val);
     summary_.last_validation = q;
     summary_.seconds.validation += t.WallSeconds();
-    validated_ = q;
-    validated_at_ = it;
   }
   const double n = window_.steps;
   recorder->Record(
@@ -526,6 +523,7 @@ void FitRun::RecordIteration(Trainer* trainer, RunRecorder* recorder,
   if (q.mpsnr) status << "  val m " << *q.mpsnr;
   bar->SetStatus(status.str());
   window_ = {};
+  return q;
 }
 
 // The convergence stop, gated after the last expansion step and the end of
@@ -538,13 +536,10 @@ void FitRun::StartConvergence(const Trainer& trainer, bool resuming) {
                 "the workspace has no validation frames to read; use train "
                 "(or auto)");
   }
-  std::int64_t last_expansion = 0;
-  if (ex_.expansion) {
-    last_expansion = o_.expansion.one_step
-                         ? o_.expansion.every
-                         : (o_.trainer.iterations - 1) / o_.expansion.every *
-                               o_.expansion.every;
-  }
+  const std::int64_t last_expansion =
+      ex_.expansion
+          ? LastExpansionIteration(o_.expansion, o_.trainer.iterations)
+          : 0;
   rule_.emplace(o_.convergence,
                 ConvergenceGate(last_expansion,
                                 trainer.options().strategy.densify_until));
@@ -565,8 +560,9 @@ void FitRun::StartConvergence(const Trainer& trainer, bool resuming) {
   }
 }
 
-// Whether the convergence stop ends the fit at this iteration.
-bool FitRun::Converged(Trainer* trainer) {
+// Whether the convergence stop ends the fit at this iteration, whose
+// validation (if any) is `validated`.
+bool FitRun::Converged(Trainer* trainer, const QuickMetrics& validated) {
   const std::int64_t it = trainer->iteration();
   if (!rule_ || !rule_->Due(it) || trainer->Done()) return false;
   std::optional<double> psnr;
@@ -574,8 +570,8 @@ bool FitRun::Converged(Trainer* trainer) {
     const Timer t;
     psnr = TrainPsnr(trainer);
     summary_.seconds.validation += t.WallSeconds();
-  } else if (validated_at_ == it) {
-    psnr = validated_.psnr;
+  } else {
+    psnr = validated.psnr;
   }
   if (!psnr) return false;
   const std::optional<std::string> reason = rule_->Add(it, *psnr);
@@ -596,10 +592,10 @@ void FitRun::SaveCheckpoint(Trainer* trainer) {
 // Checkpoints every --checkpoint-every iterations and at the end; true
 // when the fit ends here (done, converged, the time budget spent, or a
 // stop asked).
-bool FitRun::StopsEarly(Trainer* trainer) {
+bool FitRun::StopsEarly(Trainer* trainer, const QuickMetrics& validated) {
   const fs::path ckpt = ws_.checkpoint();
   const std::int64_t it = trainer->iteration();
-  const bool converged = Converged(trainer);
+  const bool converged = Converged(trainer, validated);
   if (it % o_.checkpoint_every == 0 || trainer->Done() || converged)
     SaveCheckpoint(trainer);
   if (trainer->Done() || converged) return true;
@@ -690,8 +686,9 @@ FitSummary FitRun::Run() {
     CarveIfDue(trainer.get());
     window_.Add(summary_.last_step);
     bar.Add();
-    RecordIteration(trainer.get(), &recorder, &bar);
-    if (StopsEarly(trainer.get())) break;
+    const QuickMetrics validated =
+        RecordIteration(trainer.get(), &recorder, &bar);
+    if (StopsEarly(trainer.get(), validated)) break;
   }
   bar.Finish();
   if (StopRequested()) {

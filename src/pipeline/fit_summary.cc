@@ -12,10 +12,14 @@ std::string Value(const std::optional<double>& v) {
   return v ? StringPrintf("%.3f", *v) : "n/a";
 }
 
-std::optional<double> Mean(const EvaluationResult& e, const char* key) {
+std::optional<double> Metric(const MetricRow& row, const char* key) {
   for (std::size_t i = 0; i < kNumMetrics; ++i)
-    if (std::string(kMetricKeys[i]) == key) return e.mean[i];
+    if (std::string(kMetricKeys[i]) == key) return row[i];
   return std::nullopt;
+}
+
+std::optional<double> Mean(const EvaluationResult& e, const char* key) {
+  return Metric(e.mean, key);
 }
 
 }  // namespace
@@ -111,12 +115,8 @@ std::string FitSummary::FullReport() const {
         Value(Mean(e, "mssim")).c_str(), Value(Mean(e, "upsnr")).c_str(),
         Value(Mean(e, "ussim")).c_str(), val_frames);
     if (e.floor && Mean(e, "upsnr")) {
-      std::optional<double> floor_upsnr;
-      for (std::size_t i = 0; i < kNumMetrics; ++i)
-        if (std::string(kMetricKeys[i]) == "upsnr")
-          floor_upsnr = e.floor->mean[i];
       s += StringPrintf("  %-22s uPSNR %s (the mean training colour's)\n",
-                        "floor", Value(floor_upsnr).c_str());
+                        "floor", Value(Metric(e.floor->mean, "upsnr")).c_str());
     }
     s += StringPrintf("  %-22s %s\n", "metrics",
                       workspace.metrics_json().c_str());
