@@ -8,6 +8,8 @@
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+#include <pcl/sample_consensus/ransac.h>
+#include <pcl/sample_consensus/sac_model_plane.h>
 
 namespace pano4d::pcl_bridge {
 namespace {
@@ -92,6 +94,33 @@ void MeanNeighbourDistance(const float* xyz, std::size_t n, int k, float* out) {
     }
     out[i] = used > 0 ? static_cast<float>(sum / used) : 0.0f;
   }
+}
+
+bool FitPlane(const float* xyz, std::size_t n, double threshold,
+              int max_iterations, float coefficients[4],
+              std::vector<int>* inliers) {
+  inliers->clear();
+  if (n < 3) return false;
+  const auto model =
+      std::make_shared<pcl::SampleConsensusModelPlane<pcl::PointXYZ>>(
+          Cloud(xyz, n));
+  pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, threshold);
+  ransac.setMaxIterations(max_iterations);
+  if (!ransac.computeModel()) return false;
+  pcl::Indices found;
+  ransac.getInliers(found);
+  Eigen::VectorXf c;
+  ransac.getModelCoefficients(c);
+  if (found.size() < 3 || c.size() != 4) return false;
+  // Refit to every inlier (least squares), as PCL's SACSegmentation does.
+  Eigen::VectorXf refined;
+  model->optimizeModelCoefficients(found, c, refined);
+  const float norm = refined.head<3>().norm();
+  if (!(norm > 0) || !std::isfinite(norm)) return false;
+  for (int i = 0; i < 4; ++i) coefficients[i] = refined[i] / norm;
+  model->selectWithinDistance(refined / norm, threshold, found);
+  inliers->assign(found.begin(), found.end());
+  return true;
 }
 
 }  // namespace pano4d::pcl_bridge

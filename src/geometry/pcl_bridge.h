@@ -24,4 +24,14 @@ void VoxelGrid(const float* xyz, const float* rgb, std::size_t n, float leaf,
 // (pcl::KdTreeFLANN); out has n entries.
 void MeanNeighbourDistance(const float* xyz, std::size_t n, int k, float* out);
 
+// The plane most points lie within `threshold` of (pcl::RandomSampleConsensus
+// over pcl::SampleConsensusModelPlane, whose generator has a fixed seed: the
+// same points give the same plane). coefficients: a, b, c, d of
+// a x + b y + c z + d = 0 with (a, b, c) a unit normal; inliers: the indices
+// of the points within `threshold`. Returns false when no plane was found
+// (fewer than 3 points, or all on a line).
+bool FitPlane(const float* xyz, std::size_t n, double threshold,
+              int max_iterations, float coefficients[4],
+              std::vector<int>* inliers);
+
 }  // namespace pano4d::pcl_bridge

@@ -98,4 +98,21 @@ std::vector<float> MeanNeighbourDistance(const PointCloud& cloud, int k) {
   return out;
 }
 
+std::optional<Plane> FitDominantPlane(const PointCloud& cloud, double threshold,
+                                      int max_iterations) {
+  CheckPositive(threshold, "plane fit", "threshold");
+  CheckPositive(max_iterations, "plane fit", "max_iterations");
+  if (cloud.size() < 3) return std::nullopt;
+  float c[4];
+  std::vector<int> inliers;
+  if (!pcl_bridge::FitPlane(cloud.points.front().data(), cloud.size(),
+                            threshold, max_iterations, c, &inliers))
+    return std::nullopt;
+  Plane plane;
+  plane.normal = Eigen::Vector3f(c[0], c[1], c[2]);
+  plane.offset = c[3];
+  plane.inliers.assign(inliers.begin(), inliers.end());
+  return plane;
+}
+
 }  // namespace pano4d

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -48,5 +49,19 @@ PointCloud FilterPointCloud(const PointCloud& cloud,
 // fewer than k others get the mean over those there are; a single point
 // gets 0.
 std::vector<float> MeanNeighbourDistance(const PointCloud& cloud, int k = 3);
+
+// A plane n . x + offset = 0 (n a unit normal) and the points on it.
+struct Plane {
+  Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
+  float offset = 0;
+  std::vector<std::size_t> inliers;  // indices into the cloud fitted
+};
+
+// The plane the most points of `cloud` lie within `threshold` of (RANSAC,
+// PCL's, with a fixed seed: the same cloud gives the same plane; refitted
+// to its inliers). nullopt when there is none (fewer than 3 points, all on
+// a line). Throws pano4d::Error for a threshold that is not positive.
+std::optional<Plane> FitDominantPlane(const PointCloud& cloud, double threshold,
+                                      int max_iterations = 200);
 
 }  // namespace pano4d

@@ -46,6 +46,24 @@ constexpr float kWarpAlpha = 0.5f;
 // new Gaussian (a later step sees what an earlier one added).
 constexpr float kCoveredAlpha = 0.5f;
 
+// The layout is fitted to every this-many-th pixel of each source (in x
+// and y): a 480x270 source gives some 8,000 points, plenty for a few planes
+// and percentiles, and RANSAC stays well under a second.
+constexpr int kLayoutStride = 4;
+
+// The layout's shell (step 1): one Gaussian per this share of the box's
+// longest edge on each face, opaque, so that where neither a frame nor an
+// expanded view reached a novel view shows the face's colour instead of
+// the black background. 1/48: some 6,000 Gaussians in a room, a few
+// percent of a fit's.
+constexpr float kShellSpacingShare = 1.0f / 48;
+constexpr double kShellOpacity = 0.9;
+
+// The layout's box holds the source cameras with this share of their
+// median depth to spare on faces that are no fitted plane: a camera stands
+// in the room, a step or more from the wall behind it, which no frame saw.
+constexpr double kLayoutCameraMargin = 0.5;
+
 // Colour quantised to 8 bits, as the refinement target is stored (so that a
 // resumed run, which reads the PNGs, sees what the first run saw).
 cv::Mat Quantised(const cv::Mat& rgb) {
@@ -57,17 +75,44 @@ cv::Mat Quantised(const cv::Mat& rgb) {
 
 // Depth of a refined frame: the warp's where it had one, the prior's where
 // it filled and knew it, elsewhere the farthest depth around the hole
-// (FillDepthFromFarthest: unseen content is mostly background).
+// (FillDepthFromFarthest: unseen content is mostly background), no nearer
+// than the layout's surface (`layout_depth`, 0 = none; may be empty).
 cv::Mat RefinedDepth(const cv::Mat& warped_depth, const cv::Mat& filled_mask,
-                     const cv::Mat& prior_depth) {
+                     const cv::Mat& prior_depth, const cv::Mat& layout_depth) {
   cv::Mat depth = warped_depth.clone();
   if (!prior_depth.empty()) prior_depth.copyTo(depth, filled_mask);
   cv::Mat missing = depth <= 0;
   const int count = cv::countNonZero(missing);
-  if (count > 0 && count < static_cast<int>(depth.total())) {
-    FillDepthFromFarthest(depth, missing).copyTo(depth, missing);
-  }
+  if (count == 0) return depth;
+  cv::Mat filled = cv::Mat::zeros(depth.size(), CV_32FC1);
+  if (count < static_cast<int>(depth.total()))
+    filled = FillDepthFromFarthest(depth, missing);
+  if (!layout_depth.empty()) filled = cv::max(filled, layout_depth);
+  filled.copyTo(depth, missing);
   return depth;
+}
+
+// The static pixels of the sources with depth, every kLayoutStride-th, as
+// a coloured cloud for FitLayout.
+PointCloud StaticSourcePoints(const std::vector<cv::Mat>& rgb,
+                              const std::vector<cv::Mat>& depth,
+                              const std::vector<cv::Mat>& moving,
+                              const std::vector<RasterCamera>& cameras) {
+  PointCloud cloud;
+  for (std::size_t s = 0; s < rgb.size(); ++s) {
+    const RasterCamera& c = cameras[s];
+    for (int y = 0; y < c.height; y += kLayoutStride) {
+      for (int x = 0; x < c.width; x += kLayoutStride) {
+        const float z = depth[s].at<float>(y, x);
+        if (!(z > 0) || !std::isfinite(z)) continue;
+        if (!moving[s].empty() && moving[s].at<std::uint8_t>(y, x)) continue;
+        cloud.points.push_back(c.Unproject(x + 0.5f, y + 0.5f, z));
+        const cv::Vec3f col = rgb[s].at<cv::Vec3f>(y, x);
+        cloud.colors.emplace_back(col[0], col[1], col[2]);
+      }
+    }
+  }
+  return cloud;
 }
 
 // Drops the points (and their depths) in known empty space (free_space.h).
@@ -266,7 +311,10 @@ std::string ExpansionStepReport::Brief() const {
     << 100 * prefilled_fraction << "% of them, cracks " << 100 * crack_fraction
     << "%), " << new_gaussians << " new Gaussians (" << rejected_in_free_space
     << " candidates in seen free space dropped; " << carved
-    << " Gaussians there removed), prior " << prior;
+    << " Gaussians there removed), prior " << prior << ", layout "
+    << (layout_planes < 0 ? std::string("none")
+                          : std::to_string(layout_planes) + " plane faces");
+  if (layout_shell > 0) s << " (" << layout_shell << " shell Gaussians)";
   if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
   s << ", " << seconds << " s";
   return s.str();
@@ -281,6 +329,8 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"crack_fraction", crack_fraction},
           {"rejected_in_free_space", rejected_in_free_space},
           {"carved", carved},
+          {"layout_planes", layout_planes},
+          {"layout_shell", layout_shell},
           {"new_gaussians", new_gaussians},
           {"prior", prior},
           {"fallbacks", fallbacks},
@@ -391,6 +441,11 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   report.angle_degrees = e * options_.geometry.alpha_degrees;
   report.prior = prior_->name();
   const StepSources sources = GatherSources(fit, e);
+  report.layout_planes =
+      sources.layout.valid
+          ? static_cast<int>(std::count(sources.layout.on_plane.begin(),
+                                        sources.layout.on_plane.end(), true))
+          : -1;
   const bool chain = last_step_ == e - 1 && !previous_.empty();
   const std::filesystem::path dir = StepDir(e);
   std::filesystem::remove_all(dir);
@@ -430,8 +485,10 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   report.prefilled_fraction =
       warp.holes > 0 ? warp.prefilled / warp.holes : 0.0;
   report.crack_fraction = warp.holes > 0 ? warp.cracks / warp.holes : 0.0;
-  if (options_.gaussian_refinement)
-    AddStepGaussians(fit, count, &points, &report);
+  if (options_.gaussian_refinement) {
+    AddStepGaussians(fit, count, &points, &report,
+                     e == 1 ? &sources.layout : nullptr);
+  }
   all_cameras_.insert(all_cameras_.end(), sources.views.begin(),
                       sources.views.end());
   report.seconds =
@@ -466,6 +523,22 @@ Expansion::StepSources Expansion::GatherSources(SceneEditor* fit, int e) {
     out.depth[s] = SourceDepth(fit, v, options_.warp_depth, &rendered);
     if (!v.dynamic.empty()) out.moving[s] = MovingMask(v);
   }
+  const PointCloud points =
+      StaticSourcePoints(out.rgb, out.depth, out.moving, source_cameras);
+  std::vector<Eigen::Vector3f> centres;
+  std::vector<double> depths;
+  for (std::size_t s = 0; s < ns; ++s) {
+    centres.push_back(source_cameras[s].Center());
+    const cv::Mat& d = out.depth[s];
+    for (int y = 0; y < d.rows; y += kLayoutStride)
+      for (int x = 0; x < d.cols; x += kLayoutStride)
+        if (d.at<float>(y, x) > 0) depths.push_back(d.at<float>(y, x));
+  }
+  const float margin = depths.empty()
+                           ? 0.0f
+                           : static_cast<float>(kLayoutCameraMargin *
+                                                UpperMedian(std::move(depths)));
+  out.layout = FitLayout(points, centres, margin);
   return out;
 }
 
@@ -494,6 +567,12 @@ PriorClip Expansion::WarpDirection(const StepSources& sources, int e, int m,
       stats->prefilled +=
           FillHoles(ForwardWarp(p.rgb, p.depth, p.camera, v.camera), &w);
     }
+    if (sources.layout.valid) {
+      cv::Mat layout_depth, layout_rgb;
+      RenderLayout(sources.layout, v.camera, &layout_depth, &layout_rgb);
+      clip.layout_depth.push_back(layout_depth);
+      clip.layout_rgb.push_back(layout_rgb);
+    }
     clip.frames.push_back(w.rgb);
     clip.masks.push_back(w.mask);
     clip.depth.push_back(w.depth);
@@ -518,9 +597,10 @@ void Expansion::KeepDirection(SceneEditor* fit, const StepSources& sources,
     const ExpandedView& v = sources.views[m * ns + s];
     const cv::Mat refined =
         Quantised(Composite(clip.frames[s], filled.frames[s], clip.masks[s]));
-    const cv::Mat refined_depth =
-        RefinedDepth(clip.depth[s], clip.masks[s],
-                     filled.depth.empty() ? cv::Mat() : filled.depth[s]);
+    const cv::Mat refined_depth = RefinedDepth(
+        clip.depth[s], clip.masks[s],
+        filled.depth.empty() ? cv::Mat() : filled.depth[s],
+        clip.layout_depth.empty() ? cv::Mat() : clip.layout_depth[s]);
     (*current)[m * ns + s] = {v.camera, refined, refined_depth};
     const std::string& id = v.name;
     WriteImage(dir / "warped" / (id + ".png"),
@@ -558,14 +638,15 @@ void Expansion::KeepDirection(SceneEditor* fit, const StepSources& sources,
 }
 
 void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
-                                 NewPoints* points,
-                                 ExpansionStepReport* report) {
+                                 NewPoints* points, ExpansionStepReport* report,
+                                 const Layout* shell) {
   report->carved = Carve(fit);
-  if (points->cloud.size() == 0) return;
   // Checked against this step's views.
   const std::vector<SeenDepth> step_seen(
       expanded_seen_.end() - static_cast<std::ptrdiff_t>(step_views),
       expanded_seen_.end());
+  if (shell) report->layout_shell = AddLayoutShell(fit, *shell, step_seen);
+  if (points->cloud.size() == 0) return;
   report->rejected_in_free_space = KeepOutOfSeenFreeSpace(
       frames_seen_, step_seen, &points->cloud, &points->depths);
   if (points->cloud.size() == 0) return;
@@ -578,6 +659,29 @@ void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
   const PointCloud kept = FilterPointCloud(points->cloud, filter);
   report->new_gaussians =
       fit->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
+}
+
+std::int64_t Expansion::AddLayoutShell(
+    SceneEditor* fit, const Layout& layout,
+    const std::vector<SeenDepth>& step_seen) const {
+  if (!layout.valid) return 0;
+  const float spacing = kShellSpacingShare * (layout.hi - layout.lo).maxCoeff();
+  const PointCloud faces = SampleLayoutFaces(layout, spacing);
+  PointCloud unseen;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const Sight sight = Look(frames_seen_, faces.points[i]);
+    if (sight != Sight::kUnseen && sight != Sight::kUnknown) continue;
+    unseen.points.push_back(faces.points[i]);
+    unseen.colors.push_back(faces.colors[i]);
+  }
+  if (unseen.size() == 0) return 0;
+  std::vector<double> unused(unseen.size());
+  KeepOutOfSeenFreeSpace(frames_seen_, step_seen, &unseen, &unused);
+  if (unseen.size() == 0) return 0;
+  InitOptions init;
+  init.sh_degree = fit->scene().statics.sh_degree;
+  init.initial_opacity = kShellOpacity;
+  return fit->AddStaticGaussians(GaussiansFromCloud(unseen, spacing, init));
 }
 
 std::int64_t Expansion::Carve(SceneEditor* fit) {

@@ -12,6 +12,7 @@
 #include "src/gs/scene_editor.h"
 #include "src/pano/frame.h"
 #include "src/pano/free_space.h"
+#include "src/pano/layout.h"
 #include "src/pano/prior.h"
 #include "src/pano/trajectory.h"
 
@@ -98,7 +99,9 @@ struct ExpansionStepReport {
   std::int64_t rejected_in_free_space =
       0;                    // candidates in known empty space (InFreeSpace)
   std::int64_t carved = 0;  // static Gaussians removed by Carve first
-  std::string prior;        // the prior that filled (or "command -> geometry")
+  int layout_planes = 0;    // box faces on a fitted plane (layout.h); -1: none
+  std::int64_t layout_shell = 0;  // Gaussians on the layout's unseen faces
+  std::string prior;  // the prior that filled (or "command -> geometry")
   int fallbacks = 0;
   double seconds = 0.0;
   std::string Brief() const;
@@ -188,6 +191,7 @@ class Expansion {
   struct StepSources {
     std::vector<ExpandedView> views;
     std::vector<cv::Mat> rgb, depth, moving;
+    Layout layout;  // fitted to the sources' static pixels
   };
   StepSources GatherSources(SceneEditor* fit, int e);
   // Direction m's clip for the prior: each source warped into its view
@@ -211,10 +215,17 @@ class Expansion {
                      const std::vector<cv::Mat>& masks,
                      const std::filesystem::path& dir,
                      std::vector<Refined>* current, NewPoints* points);
-  // Carving, then the new points outside seen free space as static
-  // Gaussians (voxel-filtered at the step's scale).
+  // Carving, then `shell`'s unseen faces (AddLayoutShell; null: none),
+  // then the new points outside seen free space as static Gaussians
+  // (voxel-filtered at the step's scale).
   void AddStepGaussians(SceneEditor* fit, std::size_t step_views,
-                        NewPoints* points, ExpansionStepReport* report);
+                        NewPoints* points, ExpansionStepReport* report,
+                        const Layout* shell);
+  // The layout's faces where no frame saw them (Look: unseen or unknown)
+  // and no view of this step sees through them, as opaque Gaussians
+  // (kShellOpacity) in the faces' colours; returns the count added.
+  std::int64_t AddLayoutShell(SceneEditor* fit, const Layout& layout,
+                              const std::vector<SeenDepth>& step_seen) const;
 
   ExpansionOptions options_;
   std::uint64_t seed_;

@@ -121,22 +121,54 @@ cv::Mat MovingAt(const PriorClip& clip, std::size_t i) {
   return clip.moving.empty() ? cv::Mat() : clip.moving[i];
 }
 
+// The clip's layout of frame i (depth, colour); empty mats when it has none.
+std::pair<cv::Mat, cv::Mat> LayoutAt(const PriorClip& clip, std::size_t i) {
+  if (clip.layout_depth.empty()) return {};
+  return {clip.layout_depth[i], clip.layout_rgb[i]};
+}
+
+// Fades inpainted colour toward the layout's with the distance to the
+// nearest known pixel (`unknown`: 255 where not known): Telea's colour is a
+// fair guess next to what it continues and a poor one far inside a hole,
+// where the colour of the surface the ray meets errs less.
+void FadeToLayout(const cv::Mat& unknown,
+                  const std::pair<cv::Mat, cv::Mat>& layout, cv::Mat* rgb) {
+  const auto& [depth, colour] = layout;
+  cv::Mat distance;
+  cv::distanceTransform(unknown, distance, cv::DIST_L2, 3);
+  const double fade = kLayoutFadeShare * std::max(rgb->cols, rgb->rows);
+  for (int y = 0; y < rgb->rows; ++y) {
+    for (int x = 0; x < rgb->cols; ++x) {
+      if (!unknown.at<std::uint8_t>(y, x) || !(depth.at<float>(y, x) > 0))
+        continue;
+      const auto w =
+          static_cast<float>(std::exp(-distance.at<float>(y, x) / fade));
+      cv::Vec3f& c = rgb->at<cv::Vec3f>(y, x);
+      c = w * c + (1.0f - w) * colour.at<cv::Vec3f>(y, x);
+    }
+  }
+}
+
 // Steps 2 and 3: inpaints the state's holes, colour from its known static
 // pixels (`moving`, when not empty, marks the others) and depth from their
-// depth (0 stays where no depth is known at all). Returns false, leaving the
-// frame alone, when nothing static in it is known.
-bool InpaintHoles(WarpResult* state, const cv::Mat& moving) {
+// depth, no nearer than the layout's where there is one (0 stays where no
+// depth is known at all). Returns false, leaving the frame alone, when
+// nothing static in it is known.
+bool InpaintHoles(WarpResult* state, const cv::Mat& moving,
+                  const std::pair<cv::Mat, cv::Mat>& layout) {
   const cv::Mat& hole = state->mask;
   const cv::Mat unknown = moving.empty() ? hole : (hole | moving);
   if (cv::countNonZero(unknown) == static_cast<int>(unknown.total()))
     return false;
-  const cv::Mat rgb = InpaintFloat(state->rgb, unknown, 1.0);
+  cv::Mat rgb = InpaintFloat(state->rgb, unknown, 1.0);
+  if (!layout.first.empty()) FadeToLayout(unknown, layout, &rgb);
   rgb.copyTo(state->rgb, hole);
   const cv::Mat no_depth = unknown | (state->depth <= 0);
-  if (cv::countNonZero(no_depth) < static_cast<int>(no_depth.total())) {
-    const cv::Mat depth = FillDepthFromFarthest(state->depth, no_depth);
-    depth.copyTo(state->depth, hole);
-  }
+  cv::Mat depth = cv::Mat::zeros(state->depth.size(), CV_32FC1);
+  if (cv::countNonZero(no_depth) < static_cast<int>(no_depth.total()))
+    depth = FillDepthFromFarthest(state->depth, no_depth);
+  if (!layout.first.empty()) depth = cv::max(depth, layout.first);
+  depth.copyTo(state->depth, hole);
   state->mask.setTo(0);
   return true;
 }
@@ -149,7 +181,7 @@ void PropagateReference(const PriorClip& clip,
   WarpResult& reference = (*states)[r];
   if (!HasHoles(reference)) return;
   const cv::Mat invented = reference.mask.clone();
-  if (!InpaintHoles(&reference, MovingAt(clip, r))) return;
+  if (!InpaintHoles(&reference, MovingAt(clip, r), LayoutAt(clip, r))) return;
   for (std::size_t i = 0; i < states->size(); ++i) {
     if (i == r || !HasHoles((*states)[i])) continue;
     FillHoles(ForwardWarp(reference.rgb, reference.depth, clip.cameras[r],
@@ -318,6 +350,14 @@ void PriorClip::Check() const {
     check_count("moving", moving.size());
     CheckPerFrame(name, "moving", moving, CV_8UC1, "CV_8UC1", cameras);
   }
+  if (!layout_depth.empty() || !layout_rgb.empty()) {
+    check_count("layout_depth", layout_depth.size());
+    check_count("layout_rgb", layout_rgb.size());
+    CheckPerFrame(name, "layout_depth", layout_depth, CV_32FC1, "CV_32FC1",
+                  cameras);
+    CheckPerFrame(name, "layout_rgb", layout_rgb, CV_32FC3, "CV_32FC3",
+                  cameras);
+  }
 }
 
 PriorResult GeometryPrior::Fill(const PriorClip& clip) {
@@ -333,7 +373,8 @@ PriorResult GeometryPrior::Fill(const PriorClip& clip) {
   int unknown = 0;
   for (std::size_t i = 0; i < count; ++i) {
     WarpResult& state = states[i];
-    if (HasHoles(state) && !InpaintHoles(&state, MovingAt(clip, i))) {
+    if (HasHoles(state) &&
+        !InpaintHoles(&state, MovingAt(clip, i), LayoutAt(clip, i))) {
       state.rgb.setTo(cv::Scalar::all(kUnknownGrey), state.mask);
       ++unknown;
     }

@@ -28,6 +28,13 @@ struct PriorClip {
   // else at the clip's other times, so the geometry prior neither copies it
   // across time nor inpaints from it.
   std::vector<cv::Mat> moving;
+  // Optional (empty, or one per frame): the scene's layout proxy
+  // (src/pano/layout.h) seen from each frame's camera: z-depth (CV_32FC1,
+  // 0 = the ray meets none) and colour (CV_32FC3). Where a hole's content
+  // comes from nothing the clip saw, the geometry prior places it on this
+  // surface and fades its colour toward the surface's.
+  std::vector<cv::Mat> layout_depth;
+  std::vector<cv::Mat> layout_rgb;
 
   // Throws pano4d::Error naming the field when counts, sizes or types
   // disagree (every per-frame vector has frames.size() entries, all of the
@@ -54,6 +61,12 @@ class Prior {
   virtual PriorResult Fill(const PriorClip& clip) = 0;
 };
 
+// The share of a frame's larger side over which inpainted colour fades to
+// the layout's (weight exp(-distance / (share x side)) on Telea's): a few
+// pixels from the hole's edge Telea continues what it sees; deeper in, it
+// smears edge colours over a surface it knows nothing of.
+inline constexpr double kLayoutFadeShare = 0.05;
+
 // The CPU default, with no model weights: geometry first, then classical
 // inpainting, consistent over time.
 //  1. Content seen at other times: each frame's holes are filled from the
@@ -65,6 +78,9 @@ class Prior {
 //     its filled pixels are warped into the other frames, so that the same
 //     invented content appears at every time.
 //  3. What is still empty is inpainted per frame, from its static pixels.
+// Where the clip has a layout, inpainted content lies no nearer than the
+// layout's surface, and its colour fades from the inpainted one at the
+// hole's edge to the surface's within kLayoutFadeShare of the frame's size.
 class GeometryPrior : public Prior {
  public:
   std::string name() const override { return "geometry"; }
@@ -110,9 +126,9 @@ class CommandPrior : public Prior {
 // The prior the expansion fills holes with: the external command when given
 // (its work folders under `work_dir`), falling back to the CPU geometry
 // prior when it fails; the CPU prior alone when `command` is empty.
-std::unique_ptr<Prior> MakePrior(
-    const std::string& command, const std::filesystem::path& work_dir,
-    double timeout_seconds = kPriorTimeoutSeconds);
+std::unique_ptr<Prior> MakePrior(const std::string& command,
+                                 const std::filesystem::path& work_dir,
+                                 double timeout_seconds = kPriorTimeoutSeconds);
 
 // V_refined = M * filled + (1 - M) * warped, per frame (M: 255 = filled).
 cv::Mat Composite(const cv::Mat& warped, const cv::Mat& filled,

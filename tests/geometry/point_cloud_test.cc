@@ -82,5 +82,42 @@ TEST(PointCloudTest, MeanNeighbourDistanceOfAGridIsItsSpacing) {
   EXPECT_THROW(MeanNeighbourDistance(one, 0), Error);
 }
 
+TEST(PointCloudTest, TheDominantPlaneIsFoundAmongClutter) {
+  // 600 points on the tilted plane n . x = 1.5 with 1 cm of noise, and 300
+  // scattered through a cube: RANSAC finds the plane, and its inliers are
+  // the plane's points.
+  const Eigen::Vector3f n = Eigen::Vector3f(0.2f, -0.3f, 1.0f).normalized();
+  const Eigen::Vector3f u = n.unitOrthogonal(), v = n.cross(u);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> wide(-2, 2);
+  std::normal_distribution<float> noise(0, 0.01f);
+  PointCloud cloud;
+  for (int i = 0; i < 600; ++i)
+    cloud.points.push_back(1.5f * n + wide(rng) * u + wide(rng) * v +
+                           noise(rng) * n);
+  for (int i = 0; i < 300; ++i)
+    cloud.points.emplace_back(wide(rng), wide(rng), wide(rng) + 4);
+  const std::optional<Plane> plane = FitDominantPlane(cloud, 0.05);
+  ASSERT_TRUE(plane.has_value());
+  EXPECT_GT(std::abs(plane->normal.dot(n)), 0.999f);
+  EXPECT_NEAR(std::abs(plane->offset), 1.5f, 0.01f);
+  std::size_t on_plane = 0;
+  for (const std::size_t i : plane->inliers) on_plane += i < 600;
+  EXPECT_GE(on_plane, 590u);
+  EXPECT_LE(plane->inliers.size() - on_plane, 20u);
+  // The same cloud, the same plane (PCL's generator has a fixed seed).
+  const std::optional<Plane> again = FitDominantPlane(cloud, 0.05);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->inliers, plane->inliers);
+  EXPECT_EQ(again->normal, plane->normal);
+}
+
+TEST(PointCloudTest, APlaneFitNeedsThreePointsAndAPositiveBand) {
+  PointCloud two;
+  two.points = {Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitX()};
+  EXPECT_FALSE(FitDominantPlane(two, 0.1).has_value());
+  EXPECT_THROW(FitDominantPlane(two, 0.0), Error);
+}
+
 }  // namespace
 }  // namespace pano4d

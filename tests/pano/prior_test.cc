@@ -308,6 +308,48 @@ TEST(GeometryPriorTest, InpaintsFromStaticPixelsOnly) {
   }
 }
 
+TEST(GeometryPriorTest, AHoleNoFrameSawLiesOnTheLayoutInItsColour) {
+  // A wide hole in every frame of a still camera: nothing saw it. With a
+  // layout behind the plane (z = 3), the hole's content lies on it and,
+  // away from the hole's edge, takes its colour; a layout in front of the
+  // plane (z = 1) does not pull the content forward.
+  const cv::Rect hole(4, 4, 24, 16);
+  const cv::Point centre(16, 12);
+  const cv::Vec3f layout_colour(0.9f, 0.05f, 0.1f);
+  PriorClip clip = PlaneClip({0, 0, 0}, [](int, auto&) { return false; });
+  for (std::size_t i = 0; i < clip.frames.size(); ++i)
+    MaskRegion(&clip, i, hole);
+  const auto with_layout = [&](float z) {
+    PriorClip c = clip;
+    for (std::size_t i = 0; i < c.frames.size(); ++i) {
+      c.layout_depth.emplace_back(kHeight, kWidth, CV_32FC1, cv::Scalar(z));
+      c.layout_rgb.emplace_back(
+          kHeight, kWidth, CV_32FC3,
+          cv::Scalar(layout_colour[0], layout_colour[1], layout_colour[2]));
+    }
+    return c;
+  };
+  const PriorResult behind = GeometryPrior().Fill(with_layout(3));
+  const PriorResult in_front = GeometryPrior().Fill(with_layout(1));
+  const PriorResult none = GeometryPrior().Fill(clip);
+  for (std::size_t i = 0; i < clip.frames.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    EXPECT_NEAR(behind.depth[i].at<float>(centre), 3, 1e-5);
+    EXPECT_NEAR(in_front.depth[i].at<float>(centre), kPlaneZ, 1e-5);
+    EXPECT_NEAR(none.depth[i].at<float>(centre), kPlaneZ, 1e-5);
+    EXPECT_LT(cv::norm(behind.frames[i].at<cv::Vec3f>(centre) - layout_colour),
+              0.05);
+    EXPECT_GT(cv::norm(none.frames[i].at<cv::Vec3f>(centre) - layout_colour),
+              0.3);
+    // At the hole's edge the inpainted colour still weighs (the fade).
+    const cv::Point edge(hole.x, centre.y);
+    EXPECT_GT(cv::norm(behind.frames[i].at<cv::Vec3f>(edge) - layout_colour),
+              0.1);
+    ExpectUnmaskedIdentical(clip.frames[i], behind.frames[i], clip.masks[i]);
+    EXPECT_TRUE(AllFiniteInUnitRange(behind.frames[i]));
+  }
+}
+
 TEST(GeometryPriorTest, AFrameOfOnlyMovingContentKeepsItAndFillsGrey) {
   // Every frame: the left half a hole, the right half a moving object, so
   // nothing static is known anywhere.
@@ -381,6 +423,16 @@ TEST(PriorClipTest, CheckNamesTheFieldThatDisagrees) {
     ADD_FAILURE() << "expected an Error";
   } catch (const Error& e) {
     EXPECT_EQ(e.field(), "moving");
+  }
+  PriorClip layout_without_colour = clip;
+  for (int i = 0; i < 2; ++i)
+    layout_without_colour.layout_depth.emplace_back(kHeight, kWidth, CV_32FC1,
+                                                    cv::Scalar(3));
+  try {
+    layout_without_colour.Check();
+    ADD_FAILURE() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "layout_rgb");
   }
 }
 

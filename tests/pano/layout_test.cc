@@ -1,0 +1,193 @@
+#include "src/pano/layout.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+
+namespace pano4d {
+namespace {
+
+const Eigen::Vector3f kFloor(0.6f, 0.6f, 0.2f), kBackWall(0.2f, 0.5f, 0.2f),
+    kSideWall(0.8f, 0.3f, 0.3f), kClutter(0.1f, 0.1f, 0.9f);
+
+// A room x in [-4, 4], y in [-3, 3], z in [0, 3] of which a camera saw part
+// of the floor, the back wall (y = 3) and one side wall (x = 4), with a box
+// on the floor: its points turned by `world_from_room`, the way a
+// reconstruction's axes lie anywhere.
+PointCloud SeenRoom(const Eigen::Matrix3f& world_from_room) {
+  std::mt19937 rng(11);
+  const auto u = [&](float lo, float hi) {
+    return std::uniform_real_distribution<float>(lo, hi)(rng);
+  };
+  std::normal_distribution<float> noise(0, 0.01f);
+  PointCloud cloud;
+  const auto add = [&](const Eigen::Vector3f& room, const Eigen::Vector3f& c) {
+    cloud.points.push_back(world_from_room * room);
+    cloud.colors.push_back(c);
+  };
+  for (int i = 0; i < 2000; ++i)
+    add({u(-3.5f, 4), u(-2, 3), noise(rng)}, kFloor);
+  for (int i = 0; i < 1500; ++i)
+    add({u(-3.5f, 4), 3 + noise(rng), u(0, 3)}, kBackWall);
+  for (int i = 0; i < 800; ++i)
+    add({4 + noise(rng), u(-2, 3), u(0, 3)}, kSideWall);
+  for (int i = 0; i < 400; ++i) {  // a 0.6 m box's top and two sides
+    const int side = i % 3;
+    Eigen::Vector3f p(u(-0.3f, 0.3f), u(0.7f, 1.3f), u(0, 0.6f));
+    if (side == 0) p.z() = 0.6f;
+    if (side == 1) p.x() = -0.3f;
+    if (side == 2) p.y() = 0.7f;
+    add(p, kClutter);
+  }
+  return cloud;
+}
+
+Eigen::Matrix3f Turn() {
+  return Eigen::AngleAxisf(0.7f, Eigen::Vector3f(1, 2, 3).normalized())
+      .toRotationMatrix();
+}
+
+TEST(LayoutTest, ARoomsBoxIsItsWallsAndFloorWithTheirColours) {
+  const Eigen::Matrix3f r = Turn();
+  const Layout layout = FitLayout(SeenRoom(r));
+  ASSERT_TRUE(layout.valid);
+  // Every room axis is one of the box's axes.
+  for (int j = 0; j < 3; ++j) {
+    const Eigen::Vector3f room_axis = r.col(j);
+    const float best =
+        (layout.axes.transpose() * room_axis).cwiseAbs().maxCoeff();
+    EXPECT_GT(best, 0.995f) << "room axis " << j;
+  }
+  // From the middle of the room at 1.5 m height: down meets the floor,
+  // ahead the back wall, right the side wall, each on a plane with its
+  // colour.
+  const Eigen::Vector3f eye = r * Eigen::Vector3f(0, 0, 1.5f);
+  struct Case {
+    Eigen::Vector3f direction;
+    float t;
+    Eigen::Vector3f colour;
+  };
+  for (const Case& c :
+       {Case{{0, 0, -1}, 1.5f, kFloor}, Case{{0, 1, 0}, 3.0f, kBackWall},
+        Case{{1, 0, 0}, 4.0f, kSideWall}}) {
+    SCOPED_TRACE(c.t);
+    const auto hit = layout.Exit(eye, r * c.direction);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_NEAR(hit->t, c.t, 0.03f);
+    EXPECT_TRUE(layout.on_plane[hit->face]);
+    EXPECT_LT((layout.colours[hit->face] - c.colour).norm(), 0.05f);
+  }
+  // Left and up no frame saw a wall: the box ends where the points do,
+  // in the scene's mean colour.
+  for (const Eigen::Vector3f& d :
+       {Eigen::Vector3f(-1, 0, 0), Eigen::Vector3f(0, 0, 1)}) {
+    const auto hit = layout.Exit(eye, r * d);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_FALSE(layout.on_plane[hit->face]);
+    EXPECT_EQ(layout.colours[hit->face], layout.mean_colour);
+  }
+  EXPECT_NEAR(layout.Exit(eye, r * Eigen::Vector3f(-1, 0, 0))->t, 3.45f, 0.1f);
+  // A ray from outside, pointing away, misses.
+  EXPECT_FALSE(
+      layout.Exit(r * Eigen::Vector3f(0, 0, 10), r * Eigen::Vector3f(0, 0, 1))
+          .has_value());
+}
+
+TEST(LayoutTest, TheBoxHoldsTheCamerasOnFacesThatAreNoPlane) {
+  // A camera at y = -2.5, outside the points' extent (the floor's points
+  // start at y = -2): the wall behind it (no plane) moves out past it by
+  // the margin; the floor (a plane) stays where it is.
+  const Eigen::Matrix3f r = Turn();
+  const Eigen::Vector3f eye = r * Eigen::Vector3f(0, -2.5f, 1.5f);
+  const Layout plain = FitLayout(SeenRoom(r));
+  const Layout held = FitLayout(SeenRoom(r), {eye}, 0.5f);
+  ASSERT_TRUE(plain.valid && held.valid);
+  const Eigen::Vector3f back = r * Eigen::Vector3f(0, -1, 0);
+  const Eigen::Vector3f down = r * Eigen::Vector3f(0, 0, -1);
+  const Eigen::Vector3f middle = r * Eigen::Vector3f(0, 0, 1.5f);
+  EXPECT_NEAR(plain.Exit(middle, back)->t, 1.97f, 0.05f);
+  EXPECT_NEAR(held.Exit(middle, back)->t, 3.0f, 1e-3f);
+  EXPECT_FALSE(held.on_plane[held.Exit(middle, back)->face]);
+  int up = 0;  // the box axis along the room's z
+  for (int j = 1; j < 3; ++j)
+    if (std::abs(held.axes.col(j).dot(r.col(2))) >
+        std::abs(held.axes.col(up).dot(r.col(2))))
+      up = j;
+  EXPECT_EQ(held.lo[up], plain.lo[up]);
+  EXPECT_EQ(held.hi[up], plain.hi[up]);  // the eye is below the top
+  EXPECT_NEAR(held.Exit(eye, down)->t, 1.5f, 0.03f);
+}
+
+TEST(LayoutTest, RenderedDepthIsTheZDepthOfTheSurface) {
+  const Eigen::Matrix3f r = Turn();
+  const Layout layout = FitLayout(SeenRoom(r));
+  ASSERT_TRUE(layout.valid);
+  // A camera 1.5 m above the floor looking straight down.
+  RasterCamera camera;
+  camera.width = 40;
+  camera.height = 30;
+  camera.fx = camera.fy = 30;
+  camera.cx = 20;
+  camera.cy = 15;
+  Eigen::Matrix3f cam_from_room;
+  cam_from_room << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  camera.rotation = cam_from_room * r.transpose();
+  camera.translation = -camera.rotation * (r * Eigen::Vector3f(0, 0, 1.5f));
+  cv::Mat depth, rgb;
+  RenderLayout(layout, camera, &depth, &rgb);
+  ASSERT_EQ(depth.type(), CV_32FC1);
+  ASSERT_EQ(rgb.type(), CV_32FC3);
+  // The floor is flat: every pixel's z-depth is the height, not the ray's
+  // length.
+  for (const cv::Point p :
+       {cv::Point(20, 15), cv::Point(2, 2), cv::Point(37, 27)}) {
+    EXPECT_NEAR(depth.at<float>(p), 1.5f, 0.03f) << p;
+    const cv::Vec3f c = rgb.at<cv::Vec3f>(p);
+    EXPECT_NEAR(c[2], kFloor.z(), 0.05f) << p;
+  }
+}
+
+TEST(LayoutTest, TheShellCoversEveryFaceInItsColour) {
+  const Eigen::Matrix3f r = Turn();
+  const Layout layout = FitLayout(SeenRoom(r));
+  ASSERT_TRUE(layout.valid);
+  const float spacing = 0.25f;
+  const PointCloud shell = SampleLayoutFaces(layout, spacing);
+  const Eigen::Vector3f size = layout.hi - layout.lo;
+  const auto cells = [&](int j) { return std::ceil(size[j] / spacing); };
+  EXPECT_EQ(shell.size(), static_cast<std::size_t>(2 * (cells(0) * cells(1) +
+                                                        cells(1) * cells(2) +
+                                                        cells(0) * cells(2))));
+  ASSERT_EQ(shell.colors.size(), shell.size());
+  // Each point lies on a face of the box and has that face's colour: seen
+  // from the box's centre, the ray through it leaves the box there.
+  const Eigen::Vector3f centre = layout.axes * ((layout.lo + layout.hi) / 2);
+  for (std::size_t i = 0; i < shell.size(); i += 7) {
+    const auto hit = layout.Exit(centre, shell.points[i] - centre);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_NEAR(hit->t, 1.0f, 1e-4f);
+    EXPECT_EQ(shell.colors[i], layout.colours[hit->face]);
+  }
+  EXPECT_EQ(SampleLayoutFaces(Layout(), spacing).size(), 0u);
+}
+
+TEST(LayoutTest, TooFewPointsGiveNoLayoutAndNoDepth) {
+  PointCloud few;
+  for (int i = 0; i < 50; ++i) {
+    few.points.emplace_back(i * 0.1f, 0, 0);
+    few.colors.emplace_back(0.3f, 0.3f, 0.3f);
+  }
+  const Layout layout = FitLayout(few);
+  EXPECT_FALSE(layout.valid);
+  EXPECT_FALSE(layout.Exit({0, 0, 0}, {1, 0, 0}).has_value());
+  RasterCamera camera;
+  camera.width = 8;
+  camera.height = 6;
+  cv::Mat depth, rgb;
+  RenderLayout(layout, camera, &depth, &rgb);
+  EXPECT_EQ(cv::countNonZero(depth), 0);
+}
+
+}  // namespace
+}  // namespace pano4d
