@@ -115,6 +115,30 @@ PointCloud StaticSourcePoints(const std::vector<cv::Mat>& rgb,
   return cloud;
 }
 
+// The step's layout: fitted to the sources' static points, holding their
+// cameras with kLayoutCameraMargin x their median depth to spare.
+Layout SourceLayout(const std::vector<cv::Mat>& rgb,
+                    const std::vector<cv::Mat>& depth_maps,
+                    const std::vector<cv::Mat>& moving,
+                    const std::vector<RasterCamera>& cameras) {
+  const PointCloud points =
+      StaticSourcePoints(rgb, depth_maps, moving, cameras);
+  std::vector<Eigen::Vector3f> centres;
+  std::vector<double> depths;
+  for (std::size_t s = 0; s < cameras.size(); ++s) {
+    centres.push_back(cameras[s].Center());
+    const cv::Mat& d = depth_maps[s];
+    for (int y = 0; y < d.rows; y += kLayoutStride)
+      for (int x = 0; x < d.cols; x += kLayoutStride)
+        if (d.at<float>(y, x) > 0) depths.push_back(d.at<float>(y, x));
+  }
+  const float margin = depths.empty()
+                           ? 0.0f
+                           : static_cast<float>(kLayoutCameraMargin *
+                                                UpperMedian(std::move(depths)));
+  return FitLayout(points, centres, margin);
+}
+
 // Drops the points (and their depths) in known empty space (free_space.h).
 // Returns the count dropped.
 std::int64_t KeepOutOfSeenFreeSpace(const std::vector<SeenDepth>& frames,
@@ -523,22 +547,7 @@ Expansion::StepSources Expansion::GatherSources(SceneEditor* fit, int e) {
     out.depth[s] = SourceDepth(fit, v, options_.warp_depth, &rendered);
     if (!v.dynamic.empty()) out.moving[s] = MovingMask(v);
   }
-  const PointCloud points =
-      StaticSourcePoints(out.rgb, out.depth, out.moving, source_cameras);
-  std::vector<Eigen::Vector3f> centres;
-  std::vector<double> depths;
-  for (std::size_t s = 0; s < ns; ++s) {
-    centres.push_back(source_cameras[s].Center());
-    const cv::Mat& d = out.depth[s];
-    for (int y = 0; y < d.rows; y += kLayoutStride)
-      for (int x = 0; x < d.cols; x += kLayoutStride)
-        if (d.at<float>(y, x) > 0) depths.push_back(d.at<float>(y, x));
-  }
-  const float margin = depths.empty()
-                           ? 0.0f
-                           : static_cast<float>(kLayoutCameraMargin *
-                                                UpperMedian(std::move(depths)));
-  out.layout = FitLayout(points, centres, margin);
+  out.layout = SourceLayout(out.rgb, out.depth, out.moving, source_cameras);
   return out;
 }
 
