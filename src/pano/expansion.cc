@@ -51,13 +51,17 @@ constexpr float kCoveredAlpha = 0.5f;
 // and percentiles, and RANSAC stays well under a second.
 constexpr int kLayoutStride = 4;
 
-// The layout's shell (step 1): one Gaussian per this share of the box's
-// longest edge on each face, opaque, so that where neither a frame nor an
-// expanded view reached a novel view shows the face's colour instead of
-// the black background. 1/48: some 6,000 Gaussians in a room, a few
-// percent of a fit's.
+// The layout's shell (before step 1): one Gaussian per this share of the
+// box's longest edge on each face, opaque, so that where neither a frame
+// nor an expanded view reached a novel view shows the face's colour
+// instead of the black background. 1/48: some 6,000 Gaussians in a room, a
+// few percent of a fit's.
 constexpr float kShellSpacingShare = 1.0f / 48;
 constexpr double kShellOpacity = 0.9;
+// A shell Gaussian's footprint reaches this many spacings (its scale) from
+// its centre (at opacity 0.9 it falls below 1/255 at 3.3 sigma): one whose
+// centre lies just outside a frame's view still veils the frame's edge.
+constexpr float kShellReach = 3.0f;
 
 // The layout's box holds the source cameras with this share of their
 // median depth to spare on faces that are no fitted plane: a camera stands
@@ -338,7 +342,6 @@ std::string ExpansionStepReport::Brief() const {
     << " Gaussians there removed), prior " << prior << ", layout "
     << (layout_planes < 0 ? std::string("none")
                           : std::to_string(layout_planes) + " plane faces");
-  if (layout_shell > 0) s << " (" << layout_shell << " shell Gaussians)";
   if (fallbacks > 0) s << " (" << fallbacks << " fallbacks)";
   s << ", " << seconds << " s";
   return s.str();
@@ -354,7 +357,6 @@ nlohmann::json ExpansionStepReport::ToJson() const {
           {"rejected_in_free_space", rejected_in_free_space},
           {"carved", carved},
           {"layout_planes", layout_planes},
-          {"layout_shell", layout_shell},
           {"new_gaussians", new_gaussians},
           {"prior", prior},
           {"fallbacks", fallbacks},
@@ -509,10 +511,8 @@ ExpansionStepReport Expansion::RunStep(SceneEditor* fit, int e) {
   report.prefilled_fraction =
       warp.holes > 0 ? warp.prefilled / warp.holes : 0.0;
   report.crack_fraction = warp.holes > 0 ? warp.cracks / warp.holes : 0.0;
-  if (options_.gaussian_refinement) {
-    AddStepGaussians(fit, count, &points, &report,
-                     e == 1 ? &sources.layout : nullptr);
-  }
+  if (options_.gaussian_refinement)
+    AddStepGaussians(fit, count, &points, &report);
   all_cameras_.insert(all_cameras_.end(), sources.views.begin(),
                       sources.views.end());
   report.seconds =
@@ -647,15 +647,14 @@ void Expansion::KeepDirection(SceneEditor* fit, const StepSources& sources,
 }
 
 void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
-                                 NewPoints* points, ExpansionStepReport* report,
-                                 const Layout* shell) {
+                                 NewPoints* points,
+                                 ExpansionStepReport* report) {
   report->carved = Carve(fit);
+  if (points->cloud.size() == 0) return;
   // Checked against this step's views.
   const std::vector<SeenDepth> step_seen(
       expanded_seen_.end() - static_cast<std::ptrdiff_t>(step_views),
       expanded_seen_.end());
-  if (shell) report->layout_shell = AddLayoutShell(fit, *shell, step_seen);
-  if (points->cloud.size() == 0) return;
   report->rejected_in_free_space = KeepOutOfSeenFreeSpace(
       frames_seen_, step_seen, &points->cloud, &points->depths);
   if (points->cloud.size() == 0) return;
@@ -670,27 +669,52 @@ void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
       fit->AddStaticGaussians(GaussiansFromCloud(kept, voxel, init));
 }
 
-std::int64_t Expansion::AddLayoutShell(
-    SceneEditor* fit, const Layout& layout,
-    const std::vector<SeenDepth>& step_seen) const {
-  if (!layout.valid) return 0;
+Expansion::Shell Expansion::AddLayoutShell(SceneEditor* fit) {
+  if (!options_.gaussian_refinement) return {};
+  Prepare(*fit);
+  const std::vector<TrainingView>& views = fit->views();
+  std::vector<cv::Mat> rgb, depth, moving;
+  std::vector<RasterCamera> cameras;
+  for (const Source& s : sources_) {
+    const TrainingView& v = views[s.view];
+    if (v.depth.empty()) continue;
+    rgb.push_back(MatView(v.rgb, v.camera.height, v.camera.width, 3));
+    depth.push_back(MatView(v.depth, v.camera.height, v.camera.width));
+    moving.push_back(v.dynamic.empty() ? cv::Mat() : MovingMask(v));
+    cameras.push_back(v.camera);
+  }
+  Shell shell;
+  if (cameras.empty()) return shell;
+  const Layout layout = SourceLayout(rgb, depth, moving, cameras);
+  if (!layout.valid) return shell;
+  shell.planes = static_cast<int>(
+      std::count(layout.on_plane.begin(), layout.on_plane.end(), true));
   const float spacing = kShellSpacingShare * (layout.hi - layout.lo).maxCoeff();
   const PointCloud faces = SampleLayoutFaces(layout, spacing);
+  // Unseen or unknown to every frame, and so is every point kShellReach
+  // spacings away along the axes.
+  const auto unseen_around = [&](const Eigen::Vector3f& centre) {
+    for (int k = 0; k < 7; ++k) {
+      Eigen::Vector3f p = centre;
+      if (k > 0) p[(k - 1) / 2] += (k % 2 ? 1 : -1) * kShellReach * spacing;
+      const Sight sight = Look(frames_seen_, p);
+      if (sight != Sight::kUnseen && sight != Sight::kUnknown) return false;
+    }
+    return true;
+  };
   PointCloud unseen;
   for (std::size_t i = 0; i < faces.size(); ++i) {
-    const Sight sight = Look(frames_seen_, faces.points[i]);
-    if (sight != Sight::kUnseen && sight != Sight::kUnknown) continue;
+    if (!unseen_around(faces.points[i])) continue;
     unseen.points.push_back(faces.points[i]);
     unseen.colors.push_back(faces.colors[i]);
   }
-  if (unseen.size() == 0) return 0;
-  std::vector<double> unused(unseen.size());
-  KeepOutOfSeenFreeSpace(frames_seen_, step_seen, &unseen, &unused);
-  if (unseen.size() == 0) return 0;
+  if (unseen.size() == 0) return shell;
   InitOptions init;
   init.sh_degree = fit->scene().statics.sh_degree;
   init.initial_opacity = kShellOpacity;
-  return fit->AddStaticGaussians(GaussiansFromCloud(unseen, spacing, init));
+  shell.gaussians =
+      fit->AddStaticGaussians(GaussiansFromCloud(unseen, spacing, init));
+  return shell;
 }
 
 std::int64_t Expansion::Carve(SceneEditor* fit) {

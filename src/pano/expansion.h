@@ -100,8 +100,7 @@ struct ExpansionStepReport {
       0;                    // candidates in known empty space (InFreeSpace)
   std::int64_t carved = 0;  // static Gaussians removed by Carve first
   int layout_planes = 0;    // box faces on a fitted plane (layout.h); -1: none
-  std::int64_t layout_shell = 0;  // Gaussians on the layout's unseen faces
-  std::string prior;  // the prior that filled (or "command -> geometry")
+  std::string prior;        // the prior that filled (or "command -> geometry")
   int fallbacks = 0;
   double seconds = 0.0;
   std::string Brief() const;
@@ -126,6 +125,20 @@ class Expansion {
   // nothing (rendered alpha < 0.5) and no training frame saw empty space;
   // refinement views (L_refine on M_e) queued.
   ExpansionStepReport RunStep(SceneEditor* fit, int e);
+
+  // Before the first step of a fresh fit: the layout of the sources'
+  // static pixels (their training depth) and, as opaque Gaussians
+  // (kShellOpacity) in the faces' colours, its faces where no training
+  // frame saw them (Look: unseen or unknown). A novel view then shows the
+  // room's surfaces where nothing was seen from the first iteration on,
+  // not the black background until a step reaches there; each step carves
+  // what of the shell its views see through (Carve). Nothing without
+  // Gaussian refinement, whose ablation fits as without expansion.
+  struct Shell {
+    int planes = -1;  // box faces on a fitted plane; -1: no layout
+    std::int64_t gaussians = 0;
+  };
+  Shell AddLayoutShell(SceneEditor* fit);
 
   // Removes the static Gaussians whose centre lies in known empty space
   // (InFreeSpace, free_space.h): seen through by a training frame, or seen
@@ -215,17 +228,10 @@ class Expansion {
                      const std::vector<cv::Mat>& masks,
                      const std::filesystem::path& dir,
                      std::vector<Refined>* current, NewPoints* points);
-  // Carving, then `shell`'s unseen faces (AddLayoutShell; null: none),
-  // then the new points outside seen free space as static Gaussians
-  // (voxel-filtered at the step's scale).
+  // Carving, then the new points outside seen free space as static
+  // Gaussians (voxel-filtered at the step's scale).
   void AddStepGaussians(SceneEditor* fit, std::size_t step_views,
-                        NewPoints* points, ExpansionStepReport* report,
-                        const Layout* shell);
-  // The layout's faces where no frame saw them (Look: unseen or unknown)
-  // and no view of this step sees through them, as opaque Gaussians
-  // (kShellOpacity) in the faces' colours; returns the count added.
-  std::int64_t AddLayoutShell(SceneEditor* fit, const Layout& layout,
-                              const std::vector<SeenDepth>& step_seen) const;
+                        NewPoints* points, ExpansionStepReport* report);
 
   ExpansionOptions options_;
   std::uint64_t seed_;

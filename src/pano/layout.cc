@@ -156,8 +156,8 @@ Layout FitLayout(const PointCloud& cloud,
   const bool coloured = cloud.colors.size() == cloud.size();
   const double scale = RobustScale(cloud);
   if (!(scale > 0)) return layout;
-  const std::vector<Plane> planes =
-      DominantPlanes(cloud, kPlaneTolerance * scale);
+  const double band = kPlaneTolerance * scale;
+  const std::vector<Plane> planes = DominantPlanes(cloud, band);
   if (planes.empty()) return layout;
 
   const Eigen::Vector3f a0 = planes.front().normal;
@@ -181,6 +181,16 @@ Layout FitLayout(const PointCloud& cloud,
   }
   if (!((layout.hi - layout.lo).minCoeff() > 0)) return layout;
 
+  // The cameras' mean position along each axis, which tells the side of a
+  // thin cloud its plane bounds (without cameras: below it).
+  Eigen::Vector3f viewer =
+      Eigen::Vector3f::Constant(-std::numeric_limits<float>::infinity());
+  if (!viewpoints.empty()) {
+    viewer.setZero();
+    for (const Eigen::Vector3f& v : viewpoints) viewer += v;
+    viewer = layout.axes.transpose() * viewer /
+             static_cast<float>(viewpoints.size());
+  }
   layout.mean_colour =
       coloured ? MeanColour(cloud, nullptr) : Eigen::Vector3f::Constant(0.5f);
   layout.colours.fill(layout.mean_colour);
@@ -192,10 +202,18 @@ Layout FitLayout(const PointCloud& cloud,
       for (const std::size_t i : plane.inliers)
         at.push_back(layout.axes.col(j).dot(cloud.points[i]));
       const float c = Percentile(std::move(at), 0.5);
-      const float slack = kFaceSlack * (layout.hi[j] - layout.lo[j]);
+      // Within its inlier band of a bound, a plane is that face however
+      // thin the cloud is along its normal.
+      const float slack = std::max(kFaceSlack * (layout.hi[j] - layout.lo[j]),
+                                   static_cast<float>(band));
+      const bool at_lo = c <= layout.lo[j] + slack;
+      const bool at_hi = c >= layout.hi[j] - slack;
       int face = -1;
-      if (c <= layout.lo[j] + slack) face = 2 * j;
-      if (c >= layout.hi[j] - slack) face = 2 * j + 1;
+      if (at_lo && at_hi) {  // a thin cloud (one wall): the side past it
+        face = 2 * j + (viewer[j] < c ? 1 : 0);
+      } else if (at_lo || at_hi) {
+        face = 2 * j + (at_hi ? 1 : 0);
+      }
       if (face < 0 || layout.on_plane[face]) continue;
       layout.on_plane[face] = true;
       if (face % 2 == 0) {

@@ -48,10 +48,12 @@ struct Layout {
 // the box's axes from the largest plane's normal and the next
 // near-orthogonal one (else the points' principal direction), its extent
 // the points' 1st to 99th percentile along each axis, widened to take in a
-// plane that is a face, and, on faces that are no plane, to hold every
-// viewpoint with `margin` (world units) to spare: the cameras stood inside
-// the scene, so its walls lie behind them too. Invalid (valid = false) for
-// fewer than kLayoutMinPoints points or a cloud with no plane.
+// plane that is a face (a plane within its RANSAC band of both bounds, as
+// one wall seen head-on, bounds the side away from the viewpoints), and,
+// on faces that are no plane, to hold every viewpoint with `margin` (world
+// units) to spare: the cameras stood inside the scene, so its walls lie
+// behind them too. Invalid (valid = false) for fewer than kLayoutMinPoints
+// points or a cloud with no plane.
 Layout FitLayout(const PointCloud& cloud,
                  const std::vector<Eigen::Vector3f>& viewpoints = {},
                  float margin = 0);

@@ -150,6 +150,17 @@ ExpansionState StartExpansion(const Workspace& ws, const FitOptions& o,
           ex.steps.push_back(step);
     }
     ex.expansion->Reload(*trainer, last);
+  } else {
+    // A resumed run has its shell in the checkpoint.
+    summary->layout_shell = ex.expansion->AddLayoutShell(trainer);
+    PANO4D_LOG(kInfo) << "fit: layout "
+                      << (summary->layout_shell.planes < 0
+                              ? std::string("none")
+                              : std::to_string(summary->layout_shell.planes) +
+                                    " plane faces, " +
+                                    std::to_string(
+                                        summary->layout_shell.gaussians) +
+                                    " shell Gaussians where no frame saw");
   }
   trainer->extra_view = [e = ex.expansion.get()](std::int64_t it) {
     return e->ViewFor(it);

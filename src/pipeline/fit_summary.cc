@@ -82,10 +82,12 @@ std::string FitSummary::FullReport() const {
       t.motion, t.optimise, t.densify, t.compose, seconds.validation);
   if (expanded) {
     s += StringPrintf(
-        "  %-22s %zu steps, %.1f s, %zu refinement views, %lld static "
-        "Gaussians in seen free space removed%s\n",
+        "  %-22s %zu steps, %.1f s, %zu refinement views, %lld layout "
+        "shell Gaussians, %lld static Gaussians in seen free space "
+        "removed%s\n",
         "expansion", expansion_steps.size(), seconds.expansion,
-        refinement_views, static_cast<long long>(carved),
+        refinement_views, static_cast<long long>(layout_shell.gaussians),
+        static_cast<long long>(carved),
         panorama_only ? " (validation: the panorama results)" : "");
   } else {
     s += StringPrintf("  %-22s none (%s)\n", "expansion",
@@ -161,12 +163,14 @@ nlohmann::json FitSummary::ToJson() const {
         {"densify", t.densify},
         {"validation", seconds.validation},
         {"expansion", seconds.expansion}}},
-      {"expansion", expanded
-                        ? nlohmann::json{{"options", used.expansion.ToJson()},
-                                         {"prior_cmd", used.prior_cmd},
-                                         {"steps", expansion_steps},
-                                         {"carved", carved}}
-                        : nlohmann::json()},
+      {"expansion",
+       expanded ? nlohmann::json{{"options", used.expansion.ToJson()},
+                                 {"prior_cmd", used.prior_cmd},
+                                 {"steps", expansion_steps},
+                                 {"carved", carved},
+                                 {"layout_planes", layout_shell.planes},
+                                 {"layout_shell", layout_shell.gaussians}}
+                : nlohmann::json()},
       {"final_loss", last_step.loss},
       {"train_psnr", train_psnr},
       {"appearance",

@@ -64,6 +64,9 @@ struct FitSummary {
   nlohmann::json expansion_steps = nlohmann::json::array();  // step reports
   std::int64_t carved = 0;
   std::size_t refinement_views = 0;
+  // The layout's shell added before the first step (none when resumed:
+  // the checkpoint holds it).
+  Expansion::Shell layout_shell;
   // --no-gaussian-refinement: validation scored the panorama results.
   bool panorama_only = false;
   // Which appearance transform the validation renders took (empty: the

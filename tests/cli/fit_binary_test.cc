@@ -277,6 +277,9 @@ TEST_F(FitBinaryTest, KilledRunResumesToTheSameResult) {
   // Steps redone after the resume are not counted twice.
   ASSERT_EQ(b.at("expansion").at("steps").size(), 2u);
   EXPECT_EQ(b["expansion"]["steps"][1].at("step"), 2);
+  // The layout's shell came with the checkpoint, not a second time.
+  EXPECT_GE(a.at("expansion").at("layout_shell").get<int>(), 0);
+  EXPECT_EQ(b.at("expansion").at("layout_shell").get<int>(), 0);
   EXPECT_EQ(a.at("static_gaussians"), b.at("static_gaussians"));
   EXPECT_EQ(a.at("iterations"), b.at("iterations"));
   EXPECT_EQ(a.at("metrics"), b.at("metrics"));

@@ -154,8 +154,7 @@ TEST(ExpansionTest, StepWarpsFillsAddsGaussiansAndQueuesRefinement) {
   EXPECT_EQ(r1.ToJson().at("crack_fraction").get<double>(), r1.crack_fraction);
   EXPECT_GT(r1.new_gaussians, 0);
   EXPECT_EQ(trainer->scene().statics.size(),
-            before + static_cast<std::size_t>(r1.new_gaussians +
-                                              r1.layout_shell - r1.carved));
+            before + static_cast<std::size_t>(r1.new_gaussians - r1.carved));
   EXPECT_EQ(r1.prior, "geometry");
   for (const char* kind : {"warped", "mask", "refined"})
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "step_01" / "dir_1" /
@@ -224,6 +223,57 @@ class BareScene : public SceneEditor {
   Rasterizer rasterizer_;
   GaussianModel composed_;
 };
+
+// The layout's shell goes where no training frame saw: a training view
+// renders almost as before where it saw a surface, while a camera
+// turned round to the wall behind the frames, which none saw, sees a
+// surface instead of the background.
+TEST(ExpansionTest, TheLayoutShellCoversWhatNoFrameSawAndNothingSeen) {
+  testing::TempDir dir;
+  auto trainer = MakeTrainer(/*surface=*/true);
+  GeometryPrior prior;
+  Expansion expansion(SmallOptions(), /*seed=*/0, dir.path(), &prior);
+  RasterCamera back = CameraAt(0.15f);  // at (0.15, 0, 0), looking along -z
+  back.rotation = Eigen::Vector3f(-1, 1, -1).asDiagonal();
+  back.translation = -(back.rotation * Eigen::Vector3f(0.15f, 0, 0));
+  const auto render = [&](const RasterCamera& c) {
+    RenderOutput out;
+    trainer->Render(c, 0, &out);
+    return out;
+  };
+  const RenderOutput front_before = render(trainer->views()[1].camera);
+  const RenderOutput back_before = render(back);
+  const std::size_t before = trainer->scene().statics.size();
+
+  const Expansion::Shell shell = expansion.AddLayoutShell(trainer.get());
+  EXPECT_GE(shell.planes, 1);  // the surface the frames saw
+  EXPECT_GT(shell.gaussians, 0);
+  EXPECT_EQ(trainer->scene().statics.size(),
+            before + static_cast<std::size_t>(shell.gaussians));
+
+  const TrainingView& front = trainer->views()[1];
+  const RenderOutput front_after = render(front.camera);
+  double seen_change = 0;
+  std::size_t seen = 0;
+  for (std::size_t p = 0; p < front.depth.size(); ++p) {
+    if (!(front.depth[p] > 0)) continue;
+    ++seen;
+    for (int k = 0; k < 3; ++k)
+      seen_change +=
+          std::abs(front_after.rgb[3 * p + k] - front_before.rgb[3 * p + k]);
+  }
+  ASSERT_GT(seen, front.depth.size() / 2);
+  // What is left is the tails of shell Gaussians just past the frame's
+  // edge (0.023 with no reach kept).
+  EXPECT_LT(seen_change / (3 * seen), 3e-3);
+  const RenderOutput back_after = render(back);
+  const auto mean_alpha = [](const RenderOutput& out) {
+    return std::accumulate(out.alpha.begin(), out.alpha.end(), 0.0) /
+           static_cast<double>(out.alpha.size());
+  };
+  EXPECT_LT(mean_alpha(back_before), 0.05);
+  EXPECT_GT(mean_alpha(back_after), 0.8);
+}
 
 TEST(ExpansionTest, RunsOnAnySceneEditorAsOnATrainer) {
   testing::TempDir dir;

@@ -119,6 +119,30 @@ TEST(LayoutTest, TheBoxHoldsTheCamerasOnFacesThatAreNoPlane) {
   EXPECT_NEAR(held.Exit(eye, down)->t, 1.5f, 0.03f);
 }
 
+// One wall seen head-on (a cloud thinner than a tenth of anything): the
+// wall is the box's face on the far side from the cameras, which the box
+// holds in front of it.
+TEST(LayoutTest, ASingleWallIsTheFaceBeyondTheCameras) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-2, 2);
+  std::normal_distribution<float> noise(0, 0.01f);
+  PointCloud wall;
+  for (int i = 0; i < 1000; ++i) {
+    wall.points.emplace_back(u(rng), 0.75f * u(rng), 3 + noise(rng));
+    wall.colors.push_back(kBackWall);
+  }
+  for (const float eye_z : {0.0f, 6.0f}) {  // in front of it, then behind
+    const Eigen::Vector3f eye(0.1f, 0, eye_z);
+    const Layout layout = FitLayout(wall, {eye}, 0.5f);
+    ASSERT_TRUE(layout.valid);
+    const auto hit = layout.Exit(eye, (Eigen::Vector3f(0, 0, 3) - eye));
+    ASSERT_TRUE(hit);
+    EXPECT_TRUE(layout.on_plane[hit->face]) << "eye at z " << eye_z;
+    EXPECT_NEAR(hit->t, 1.0f, 0.02f) << "eye at z " << eye_z;
+    EXPECT_EQ(layout.colours[hit->face], kBackWall);
+  }
+}
+
 TEST(LayoutTest, RenderedDepthIsTheZDepthOfTheSurface) {
   const Eigen::Matrix3f r = Turn();
   const Layout layout = FitLayout(SeenRoom(r));
