@@ -22,6 +22,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev libcli11-dev
   libceres-dev libpcl-dev libflann-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libzip-dev
+  python3-dev pybind11-dev python3-numpy python3-pytest  # the Python module
   colmap
   chromium  # the browser test of `pano4d view` (headless, software WebGL)
   slurm-wlm munge  # the sweep test's single-node cluster (scripts/slurm_local.sh)
@@ -63,3 +64,12 @@ if ! cmake --build "$BUILD_DIR" -j "$JOBS" "${TARGET_ARGS[@]}" >"$BUILD_DIR/buil
   exit 1
 fi
 echo "pano4d setup: $("$BUILD_DIR/pano4d" --version) built in $BUILD_DIR/ in $((SECONDS - start)) s ($JOBS jobs)"
+
+# The Python module: a .pth file in Debian python3's user site names
+# build/python, so that `python3 -c "import pano4d"` finds it (as `pip
+# install -e` would; nothing is copied, a rebuild is seen at once).
+if compgen -G "$BUILD_DIR/python/pano4d*.so" >/dev/null; then
+  site=$(/usr/bin/python3 -m site --user-site)
+  mkdir -p "$site"
+  echo "$(cd "$BUILD_DIR/python" && pwd)" >"$site/pano4d.pth"
+fi

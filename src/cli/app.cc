@@ -95,25 +95,69 @@ int RunAction(const Action& action) {
   return StopRequested() ? kExitStopped : kExitError;
 }
 
-}  // namespace
-
-int Main(int argc, char** argv) {
-  CLI::App app{
-      "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen "
-      "regions "
-      "synthesised by panoramic expansion. Extra stages for a COLMAP workflow.",
-      "pano4d"};
+// The whole command line: every command, the global options into
+// `global`, the chosen command's function into `action`.
+void BuildApp(CLI::App& app, GlobalOptions* global, Action* action) {
   app.set_version_flag("--version", std::string("pano4d ") + kVersion);
   app.require_subcommand(0, 1);
   app.footer(
       "Exit status: 0 ok, 1 error (the message names the input), 64 usage "
       "error, 75 stopped on request (SIGUSR1) with its state saved: run it "
       "again (fit: with --resume).");
-  GlobalOptions global;
-  AddGlobalOptions(app, &global);
-  Action action;
-  AddCommands(app, &action);
+  AddGlobalOptions(app, global);
+  AddCommands(app, action);
   RefuseNonFiniteAndEmptyValues(&app);
+}
+
+constexpr const char* kAppDescription =
+    "pano4d: monocular video to a dynamic 4D Gaussian scene, with unseen "
+    "regions synthesised by panoramic expansion. Extra stages for a COLMAP "
+    "workflow.";
+
+}  // namespace
+
+int CallCommand(const std::vector<std::string>& args) {
+  CLI::App app{kAppDescription, "pano4d"};
+  GlobalOptions global;
+  Action action;
+  BuildApp(app, &global, &action);
+  std::vector<std::string> reversed(args.rbegin(), args.rend());
+  try {
+    app.parse(reversed);             // CLI11 takes the arguments last first
+  } catch (const CLI::Success& e) {  // --help, --help-all, --version
+    app.exit(e);
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    throw Error::In("pano4d " + (args.empty() ? std::string() : args.front()),
+                    e.what());
+  }
+  if (!action) {
+    throw Error::In("pano4d", "no command given (see pano4d --help)");
+  }
+  std::vector<std::string> line{"pano4d"};
+  line.insert(line.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : line) argv.push_back(a.data());
+  SetThisCommandLine(static_cast<int>(argv.size()), argv.data());
+  ApplyGlobalOptions(global);
+  return action();
+}
+
+std::string CommandHelp(const std::string& command) {
+  CLI::App app{kAppDescription, "pano4d"};
+  GlobalOptions global;
+  Action action;
+  BuildApp(app, &global, &action);
+  if (command.empty()) return app.help();
+  CLI::App* sub = app.get_subcommand(command);  // throws for an unknown one
+  return sub->help("pano4d");  // "Usage: pano4d fit", as the binary says
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{kAppDescription, "pano4d"};
+  GlobalOptions global;
+  Action action;
+  BuildApp(app, &global, &action);
 
   SetThisCommandLine(argc, argv);  // a workspace lock names its holder
   try {

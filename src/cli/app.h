@@ -2,6 +2,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "src/core/stop_signal.h"
 
@@ -25,6 +26,18 @@ enum ExitCode : int {
 // Parses argv, runs the chosen subcommand, and turns errors into one line on
 // stderr ("pano4d: error: <input>: <problem>") and an exit status.
 int Main(int argc, char** argv);
+
+// A command run in-process as Main runs it (`args` as after `pano4d`: the
+// command, its flags and the global ones), for what embeds pano4d (the
+// Python module): the same parsing, checks and messages, but errors are
+// thrown (pano4d::Error; a usage error is one naming the command), not
+// printed. Returns the command's exit status: kExitOk, or kExitStopped
+// when it stopped on request with its state saved. The global options
+// (--threads, --quiet) stay set for the process, as in the binary.
+int CallCommand(const std::vector<std::string>& args);
+// `pano4d <command> --help`'s text (`pano4d --help`'s for ""). Throws
+// CLI::OptionNotFound for an unknown command.
+std::string CommandHelp(const std::string& command);
 
 // A subcommand's parsed options live in its callback; the callback stores
 // the function to run here, and Main runs it after parsing succeeds.

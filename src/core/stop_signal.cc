@@ -23,5 +23,6 @@ void InstallStopSignalHandler() {
 
 bool StopRequested() { return stop_requested != 0; }
 void ClearStopRequest() { stop_requested = 0; }
+void RequestStop() { stop_requested = 1; }
 
 }  // namespace pano4d

@@ -19,6 +19,9 @@ void InstallStopSignalHandler();
 // ClearStopRequest).
 bool StopRequested();
 void ClearStopRequest();
+// The same request made in-process, as the signal makes it: the Python
+// module's answer to Ctrl-C while a command runs.
+void RequestStop();
 
 // The exit status of a command that stopped on request with its state
 // saved (sysexits' EX_TEMPFAIL, "try again"): the batch script of `pano4d

@@ -28,6 +28,12 @@ namespace pano4d {
 namespace fs = std::filesystem;
 namespace {
 
+// The observer of FitObserverScope; empty without one.
+FitObserver& Observer() {
+  static FitObserver observer;
+  return observer;
+}
+
 // The rasterizer culls what is nearer than kNearPlane (world units); a
 // scene whose median depth is within this factor of it loses geometry (the
 // tiny scene scaled by 1e-3 in `pano4d bench stability` learns nothing).
@@ -699,6 +705,11 @@ FitSummary FitRun::Run() {
     bar.Add();
     const QuickMetrics validated =
         RecordIteration(trainer.get(), &recorder, &bar);
+    if (Observer()) {
+      Observer()({trainer->iteration(), o_.trainer.iterations,
+                  summary_.last_step.loss, summary_.last_step.psnr,
+                  trainer->scene().size(), validated});
+    }
     if (StopsEarly(trainer.get(), validated)) break;
   }
   bar.Finish();
@@ -714,6 +725,16 @@ FitSummary FitRun::Run() {
 }
 
 }  // namespace
+
+FitObserverScope::FitObserverScope(FitObserver observer) {
+  if (Observer()) {
+    throw Error::In("pano4d",
+                    "another stage is running in this process (one at a "
+                    "time)");
+  }
+  Observer() = std::move(observer);
+}
+FitObserverScope::~FitObserverScope() { Observer() = nullptr; }
 
 FitSummary FitController::Run() {
   given_.Check();

@@ -8,6 +8,7 @@
 // same options and function (MakeFitTrainer).
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -100,6 +101,27 @@ class FitController {
   FitOptions given_;
   FitInputs inputs_;
   std::atomic<bool> stop_{false};
+};
+
+// One iteration of a running fit, as a progress observer sees it.
+struct FitProgress {
+  std::int64_t iteration = 0, iterations = 0;  // done, scheduled
+  double loss = 0, train_psnr = 0;             // this iteration's
+  std::size_t gaussians = 0;
+  QuickMetrics validation;  // set on the iterations that validated
+};
+// Called by every fit in this process after each iteration, on the fit's
+// thread, while a FitObserverScope lives (one at a time): what embeds the
+// library (the Python module) shows progress and asks to stop through it
+// (RequestStop, stop_signal.h). Nothing the fit computes depends on it.
+// A second scope while one lives throws pano4d::Error.
+using FitObserver = std::function<void(const FitProgress&)>;
+class FitObserverScope {
+ public:
+  explicit FitObserverScope(FitObserver observer);
+  ~FitObserverScope();
+  FitObserverScope(const FitObserverScope&) = delete;
+  FitObserverScope& operator=(const FitObserverScope&) = delete;
 };
 
 // LoadFitInputs and FitController::Run in one call.

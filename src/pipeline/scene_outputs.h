@@ -38,6 +38,9 @@ class SceneRenderer {
  public:
   explicit SceneRenderer(const GaussianScene& scene) : scene_(scene) {}
   cv::Mat Render(const RasterCamera& camera, int time);
+  // The last Render's output (linear RGB, z-depth, alpha) before it became
+  // 8-bit.
+  const RenderOutput& output() const { return out_; }
 
  private:
   const GaussianScene& scene_;

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/camera.h"
+#include "src/core/error.h"
 #include "src/core/image.h"
 #include "src/core/json.h"
 #include "src/core/version.h"
@@ -67,6 +68,25 @@ TEST(CliTest, UsageErrorsExitSixtyFour) {
   EXPECT_EQ(RunCli({"bench"}).status, kExitUsage);    // missing bench name
   EXPECT_EQ(RunCli({"--log-level", "loud", "inspect", "x.png"}).status,
             kExitUsage);
+}
+
+// In-process (the Python module's way in): the same parser and checks,
+// errors thrown instead of printed, help as the binary prints it.
+TEST(CliTest, CallCommandThrowsWhatMainPrints) {
+  try {
+    CallCommand({"fit", "--workspace", ".", "--no-such-flag"});
+    FAIL() << "a usage error must throw";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), "pano4d fit");
+    EXPECT_NE(std::string(e.what()).find("--no-such-flag"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(CallCommand({}), Error);
+  const std::filesystem::path missing = "/nonexistent/pano4d/ws";
+  EXPECT_THROW(CallCommand({"fit", "--workspace", missing.string()}), Error);
+  const Result binary = RunCli({"fit", "--help"});
+  EXPECT_EQ(binary.out, CommandHelp("fit"));
+  EXPECT_THROW(CommandHelp("no-such-command"), std::exception);
 }
 
 TEST(CliTest, ANegativeSeedIsAUsageErrorNotAWrappedOne) {
