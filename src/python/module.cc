@@ -38,16 +38,13 @@
 #include "src/pipeline/fit.h"
 #include "src/pipeline/render.h"
 #include "src/pipeline/scene_outputs.h"
+#include "src/python/priors.h"
 #include "src/render/sh.h"
 
 namespace py = pybind11;
 
 namespace pano4d::python {
-namespace {
 
-namespace fs = std::filesystem;
-
-// nlohmann::json as Python's dict, list, str, int, float, bool or None.
 py::object ToPython(const Json& j) {
   switch (j.type()) {
     case Json::value_t::object: {
@@ -74,6 +71,10 @@ py::object ToPython(const Json& j) {
       return py::none();
   }
 }
+
+namespace {
+
+namespace fs = std::filesystem;
 
 py::object ReadJsonOrNone(const fs::path& path) {
   if (!fs::exists(path)) return py::none();
@@ -575,6 +576,8 @@ PYBIND11_MODULE(pano4d, m) {
       py::arg("path"),
       "An image file (PNG, JPEG, EXR) as RGB uint8 [H, W, 3], decoded as "
       "pano4d decodes its inputs");
+
+  AddPriorFunctions(m);
 
   m.def(
       "help",

@@ -278,3 +278,55 @@ def test_run_and_expand_return_their_summaries(tiny):
     steps = pano4d.expand(workspace=ws, directions=1, expansion_steps=1,
                           expansion_stride=4, panorama_width=64, quiet=True)
     assert [s["step"] for s in steps] == [1]
+
+
+def test_priors_written_from_python_are_read_as_written(tiny):
+    """A script's own priors (here the scene's own depth, masks and a
+    made-up flow and tracks) in the layouts --priors reads, read back as a
+    fit reads them, then taken by the depth stage."""
+    ws = pano4d.Workspace(tiny["ws"])
+    priors = tiny["root"] / "priors"
+    train = ws.frames("train")
+    rng = np.random.default_rng(0)
+    written = {}
+    for f in train:
+        depth = ws.depth(f["name"])
+        disparity = np.where(depth > 0, 1 / np.maximum(depth, 1e-6), 0)
+        pano4d.write_disparity(priors, f["name"], disparity)
+        written[f["name"]] = disparity.astype(np.float32)
+        mask = ws.dynamic_mask(f["name"])
+        pano4d.write_mask(priors, f["name"], mask)
+    h, w = written[train[0]["name"]].shape
+    flow = rng.normal(0, 1, (h, w, 2)).astype(np.float32)
+    valid = rng.random((h, w)) > 0.3
+    a, b = (os.path.basename(f["rgb"]) for f in train[:2])
+    pano4d.write_flow(priors, a, b, flow, valid)
+    tracks = rng.uniform(0, [w, h], (len(train), 5, 2)).astype(np.float32)
+    visible = rng.random((len(train), 5)) > 0.2
+    pano4d.write_tracks(priors, tracks, visible)
+
+    kinds = {l["kind"] for l in pano4d.scan_priors(priors)["layouts"]}
+    assert kinds == {"depth", "flow", "tracks", "masks"}
+    read = pano4d.read_priors(priors, tiny["ws"])
+    assert read["frames"] == [f["name"] for f in train]
+    assert read["depth"]["meaning"] == "disparity"
+    for name, disparity in written.items():
+        assert np.array_equal(read["depth"]["maps"][name], disparity)
+        assert np.array_equal(read["masks"]["maps"][name],
+                              ws.dynamic_mask(name))
+    (field,) = read["flow"]["fields"]
+    assert (field["from"], field["to"]) == (train[0]["name"], train[1]["name"])
+    assert np.array_equal(field["flow"], flow)
+    assert np.array_equal(field["valid"], valid)
+    assert field["mask_source"] == "file"
+    assert np.array_equal(read["tracks"]["pixels"], tracks)
+    assert np.array_equal(read["tracks"]["visible"], visible)
+
+    frames = pano4d.depth(dataset=tiny["dataset"],
+                          workspace=tiny["root"] / "ws_priors",
+                          priors=priors, quiet=True)
+    assert os.path.samefile(frames["priors"], priors)
+    with pytest.raises(pano4d.Error, match="NaN"):
+        pano4d.write_disparity(priors, "bad", np.full((h, w), np.nan))
+    with pytest.raises(pano4d.Error, match="ending in 2"):
+        pano4d.write_flow(priors, a, b, np.zeros((h, w, 3)))
