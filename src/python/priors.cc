@@ -212,14 +212,17 @@ void AddPriorFunctions(py::module_& m) {
         const FloatArray a =
             Checked(flow, 3, 2, "flow " + from_image + " -> " + to_image);
         const std::string stem = from_image + "_" + to_image;
-        const fs::path path = FsPath(dir) / "raft_exhaustive" / (stem + ".npy");
-        EnsureDirectory(path.parent_path());
-        WriteNpy(path, ToNpy(a));
+        cv::Mat mask;
         if (!valid.is_none()) {
-          const cv::Mat mask = MaskMat(valid, "valid of " + stem);
+          mask = MaskMat(valid, "valid of " + stem);
           if (mask.rows != a.shape(0) || mask.cols != a.shape(1)) {
             throw Error::In("valid of " + stem, "is not the flow's size");
           }
+        }
+        const fs::path path = FsPath(dir) / "raft_exhaustive" / (stem + ".npy");
+        EnsureDirectory(path.parent_path());
+        WriteNpy(path, ToNpy(a));
+        if (!mask.empty()) {
           cv::Mat red(mask.size(), CV_8UC3, cv::Scalar(0, 0, 0));
           red.setTo(cv::Scalar(0, 0, 255), mask);  // BGR: red = consistent
           const fs::path mask_path =
