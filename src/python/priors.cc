@@ -2,7 +2,7 @@
 // read as `--priors` reads them (src/datasets/priors.h), and written by a
 // script (a torch model in the same process) in layouts it reads
 // (docs/formats.md, "Learned priors").
-#include "src/python/priors.h"
+#include "src/python/module.h"
 
 #include <algorithm>
 #include <cmath>
