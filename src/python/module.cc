@@ -60,6 +60,10 @@ py::object ToPython(const Json& j) {
   }
 }
 
+std::filesystem::path FsPath(py::handle path) {
+  return py::module_::import("os").attr("fspath")(path).cast<std::string>();
+}
+
 py::object ReadJsonOrNone(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path)) return py::none();
   return ToPython(ReadJson(path));
@@ -259,9 +263,7 @@ PYBIND11_MODULE(pano4d, m) {
                         "A pano4d workspace: its frames, cameras, depth, "
                         "summaries and fitted scene")
       .def(py::init([](const py::object& path) {
-             const fs::path p(py::module_::import("os")
-                                  .attr("fspath")(path)
-                                  .cast<std::string>());
+             const fs::path p(FsPath(path));
              if (!fs::is_directory(p)) {
                throw Error::In(p.string(),
                                "is not a folder (a workspace is made by "
@@ -420,10 +422,8 @@ PYBIND11_MODULE(pano4d, m) {
   m.def(
       "read_cameras",
       [](const py::object& path) {
-        const std::string p =
-            py::module_::import("os").attr("fspath")(path).cast<std::string>();
         py::list out;
-        for (const TimedCamera& c : ReadCameraFile(p)) {
+        for (const TimedCamera& c : ReadCameraFile(FsPath(path).string())) {
           py::dict d;
           d["camera"] = c.camera;
           d["t"] = c.time;
@@ -439,9 +439,7 @@ PYBIND11_MODULE(pano4d, m) {
   m.def(
       "read_image",
       [](const py::object& path) {
-        const std::string p =
-            py::module_::import("os").attr("fspath")(path).cast<std::string>();
-        return Rgb8(ReadImage(p).ToBgr8());
+        return Rgb8(ReadImage(FsPath(path)).ToBgr8());
       },
       py::arg("path"),
       "An image file (PNG, JPEG, EXR) as RGB uint8 [H, W, 3], decoded as "

@@ -12,6 +12,8 @@ namespace pano4d::python {
 
 // nlohmann::json as Python's dict, list, str, int, float, bool or None.
 pybind11::object ToPython(const Json& j);
+// A str or os.PathLike as a path (os.fspath).
+std::filesystem::path FsPath(pybind11::handle path);
 // The JSON file at `path` as ToPython gives it; None when there is none.
 pybind11::object ReadJsonOrNone(const std::filesystem::path& path);
 

@@ -32,10 +32,6 @@ namespace py = pybind11;
 using FloatArray =
     py::array_t<float, py::array::c_style | py::array::forcecast>;
 
-fs::path FsPath(const py::object& p) {
-  return py::module_::import("os").attr("fspath")(p).cast<std::string>();
-}
-
 // A float array of `dims` dimensions (the last of size `last` when > 0),
 // checked finite: what a reader would refuse is refused at the writer.
 FloatArray Checked(const py::object& values, int dims, py::ssize_t last,

@@ -39,9 +39,8 @@ namespace py = pybind11;
 std::vector<std::string> CommandLine(const std::string& command,
                                      const py::kwargs& kwargs) {
   std::vector<std::string> args{command};
-  const py::object fspath = py::module_::import("os").attr("fspath");
-  const auto text = [&](py::handle v) {
-    if (py::hasattr(v, "__fspath__")) return fspath(v).cast<std::string>();
+  const auto text = [](py::handle v) {
+    if (py::hasattr(v, "__fspath__")) return FsPath(v).string();
     return py::str(v).cast<std::string>();
   };
   for (const auto& [key, value] : kwargs) {
@@ -145,9 +144,7 @@ fs::path PathArg(const py::kwargs& kwargs, const char* name) {
         std::string("pano4d"),
         std::string("the keyword argument ") + name + " is required");
   }
-  const py::object v = kwargs[name];
-  return fs::path(
-      py::module_::import("os").attr("fspath")(v).cast<std::string>());
+  return FsPath(kwargs[name]);
 }
 
 }  // namespace
