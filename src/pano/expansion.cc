@@ -63,6 +63,16 @@ constexpr double kShellOpacity = 0.9;
 // centre lies just outside a frame's view still veils the frame's edge.
 constexpr float kShellReach = 3.0f;
 
+// A Gaussian within this share of the shell's spacing of a plane face lies
+// on it (Layout::PlaneFaceAt): the shell's own Gaussians, and what the
+// fit placed on the floor or a wall. Half: a box's bottom 8 cm in an 8 m
+// room, and Gaussians floating that close to the plane, count as the plane.
+constexpr float kOnPlaneSpacings = 0.5f;
+
+float ShellSpacing(const Layout& layout) {
+  return kShellSpacingShare * (layout.hi - layout.lo).maxCoeff();
+}
+
 // The layout's box holds the source cameras with this share of their
 // median depth to spare on faces that are no fitted plane: a camera stands
 // in the room, a step or more from the wall behind it, which no frame saw.
@@ -418,6 +428,19 @@ void Expansion::Prepare(const SceneEditor& fit) {
     frames_seen_.push_back(MakeSeenDepth(v.camera, depth));
     frames_seen_.back().clearance = CameraClearance(depth);
   }
+  {  // layout_: the sources' training depth, as at the first step
+    std::vector<cv::Mat> rgb, depth, moving;
+    std::vector<RasterCamera> cameras;
+    for (const Source& s : sources_) {
+      const TrainingView& v = views[s.view];
+      if (v.depth.empty()) continue;
+      rgb.push_back(MatView(v.rgb, v.camera.height, v.camera.width, 3));
+      depth.push_back(MatView(v.depth, v.camera.height, v.camera.width));
+      moving.push_back(v.dynamic.empty() ? cv::Mat() : MovingMask(v));
+      cameras.push_back(v.camera);
+    }
+    if (!cameras.empty()) layout_ = SourceLayout(rgb, depth, moving, cameras);
+  }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
   if (last_step_ > 0) {
     if (!std::filesystem::exists(frame_path)) {
@@ -672,48 +695,51 @@ void Expansion::AddStepGaussians(SceneEditor* fit, std::size_t step_views,
 Expansion::Shell Expansion::AddLayoutShell(SceneEditor* fit) {
   if (!options_.gaussian_refinement) return {};
   Prepare(*fit);
-  const std::vector<TrainingView>& views = fit->views();
-  std::vector<cv::Mat> rgb, depth, moving;
-  std::vector<RasterCamera> cameras;
-  for (const Source& s : sources_) {
-    const TrainingView& v = views[s.view];
-    if (v.depth.empty()) continue;
-    rgb.push_back(MatView(v.rgb, v.camera.height, v.camera.width, 3));
-    depth.push_back(MatView(v.depth, v.camera.height, v.camera.width));
-    moving.push_back(v.dynamic.empty() ? cv::Mat() : MovingMask(v));
-    cameras.push_back(v.camera);
-  }
   Shell shell;
-  if (cameras.empty()) return shell;
-  const Layout layout = SourceLayout(rgb, depth, moving, cameras);
+  const Layout& layout = layout_;
   if (!layout.valid) return shell;
   shell.planes = static_cast<int>(
       std::count(layout.on_plane.begin(), layout.on_plane.end(), true));
-  const float spacing = kShellSpacingShare * (layout.hi - layout.lo).maxCoeff();
+  for (int face = 0; face < 6; ++face) {
+    const int j = face / 2;
+    const Eigen::Vector3f& c = layout.colours[face];
+    PANO4D_LOG(kDebug) << "layout face " << face << ": axis ("
+                       << layout.axes.col(j).transpose() << ") at "
+                       << (face % 2 ? layout.hi[j] : layout.lo[j])
+                       << (layout.on_plane[face] ? ", plane" : ", no plane")
+                       << ", colour (" << c.transpose() << ")";
+  }
+  const float spacing = ShellSpacing(layout);
   const PointCloud faces = SampleLayoutFaces(layout, spacing);
-  // Unseen or unknown to every frame, and so is every point kShellReach
-  // spacings away along the axes.
-  const auto unseen_around = [&](const Eigen::Vector3f& centre) {
-    for (int k = 0; k < 7; ++k) {
+  const auto unseen = [&](const Eigen::Vector3f& p) {
+    const Sight sight = Look(frames_seen_, p);
+    return sight == Sight::kUnseen || sight == Sight::kUnknown;
+  };
+  // Unseen or unknown to every frame. Off the fitted planes, so is every
+  // point kShellReach spacings away along the axes: a guessed face there
+  // would veil a frame's edge. On a plane the shell is the surface itself.
+  const auto keep = [&](const Eigen::Vector3f& centre) {
+    if (!unseen(centre)) return false;
+    if (layout.PlaneFaceAt(centre, kOnPlaneSpacings * spacing)) return true;
+    for (int k = 1; k < 7; ++k) {
       Eigen::Vector3f p = centre;
-      if (k > 0) p[(k - 1) / 2] += (k % 2 ? 1 : -1) * kShellReach * spacing;
-      const Sight sight = Look(frames_seen_, p);
-      if (sight != Sight::kUnseen && sight != Sight::kUnknown) return false;
+      p[(k - 1) / 2] += (k % 2 ? 1 : -1) * kShellReach * spacing;
+      if (!unseen(p)) return false;
     }
     return true;
   };
-  PointCloud unseen;
+  PointCloud kept;
   for (std::size_t i = 0; i < faces.size(); ++i) {
-    if (!unseen_around(faces.points[i])) continue;
-    unseen.points.push_back(faces.points[i]);
-    unseen.colors.push_back(faces.colors[i]);
+    if (!keep(faces.points[i])) continue;
+    kept.points.push_back(faces.points[i]);
+    kept.colors.push_back(faces.colors[i]);
   }
-  if (unseen.size() == 0) return shell;
+  if (kept.size() == 0) return shell;
   InitOptions init;
   init.sh_degree = fit->scene().statics.sh_degree;
   init.initial_opacity = kShellOpacity;
   shell.gaussians =
-      fit->AddStaticGaussians(GaussiansFromCloud(unseen, spacing, init));
+      fit->AddStaticGaussians(GaussiansFromCloud(kept, spacing, init));
   return shell;
 }
 
@@ -722,7 +748,8 @@ std::int64_t Expansion::Carve(SceneEditor* fit) {
   const GaussianModel& statics = fit->scene().statics;
   if (statics.size() == 0) return 0;
   const std::vector<std::uint8_t> empty = InFreeSpace(
-      frames_seen_, expanded_seen_, statics.means.data(), statics.size());
+      frames_seen_, expanded_seen_, statics.means.data(), statics.size(),
+      &layout_, kOnPlaneSpacings * ShellSpacing(layout_));
   std::vector<std::uint8_t> keep(empty.size());
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = !empty[i];
   const std::int64_t removed = fit->RemoveStaticGaussians(keep);

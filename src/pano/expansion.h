@@ -129,11 +129,13 @@ class Expansion {
   // Before the first step of a fresh fit: the layout of the sources'
   // static pixels (their training depth) and, as opaque Gaussians
   // (kShellOpacity) in the faces' colours, its faces where no training
-  // frame saw them (Look: unseen or unknown). A novel view then shows the
+  // frame saw them (Look: unseen or unknown; off the fitted planes, nor
+  // anything kShellReach spacings around). A novel view then shows the
   // room's surfaces where nothing was seen from the first iteration on,
   // not the black background until a step reaches there; each step carves
-  // what of the shell its views see through (Carve). Nothing without
-  // Gaussian refinement, whose ablation fits as without expansion.
+  // what of the shell off the planes its views see through (Carve).
+  // Nothing without Gaussian refinement, whose ablation fits as without
+  // expansion.
   struct Shell {
     int planes = -1;  // box faces on a fitted plane; -1: no layout
     std::int64_t gaussians = 0;
@@ -143,7 +145,10 @@ class Expansion {
   // Removes the static Gaussians whose centre lies in known empty space
   // (InFreeSpace, free_space.h): seen through by a training frame, or seen
   // by none and seen through by a stored view's warp or by most stored
-  // views. Nothing before the first step. Returns the count.
+  // views; on a fitted plane of the layout (Layout::PlaneFaceAt, within
+  // kOnPlaneSpacings of the shell's spacing), only when a training frame
+  // sees through it.
+  // Nothing before the first step. Returns the count.
   std::int64_t Carve(SceneEditor* fit);
   std::int64_t carved() const { return carved_; }
 
@@ -245,6 +250,9 @@ class Expansion {
   // What the training frames saw, and per stored view its refined depth
   // (the warp's, and the prior's in M_e) for Carve.
   std::vector<SeenDepth> frames_seen_, expanded_seen_;
+  // The layout of the sources' training depth (Prepare): the shell's faces,
+  // and the planes Carve spares.
+  Layout layout_;
   std::int64_t carved_ = 0;
   std::vector<ExpandedView> all_cameras_;
   int last_step_ = 0;

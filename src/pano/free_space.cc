@@ -89,7 +89,9 @@ Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point) {
 
 std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
                                       const std::vector<SeenDepth>& expanded,
-                                      const float* xyz, std::size_t count) {
+                                      const float* xyz, std::size_t count,
+                                      const Layout* planes,
+                                      float plane_tolerance) {
   std::vector<std::uint8_t> empty(count, 0);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(count); ++i) {
@@ -99,6 +101,7 @@ std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
       empty[i] = by_frames == Sight::kSeenThrough;
       continue;
     }
+    if (planes && planes->PlaneFaceAt(p, plane_tolerance)) continue;
     const bool by_a_camera =
         std::any_of(frames.begin(), frames.end(), [&](const SeenDepth& f) {
           return f.clearance > 0 &&

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "src/pano/layout.h"
 #include "src/render/rasterizer.h"
 
 namespace pano4d {
@@ -90,8 +91,16 @@ Sight Look(const std::vector<SeenDepth>& views, const Eigen::Vector3f& point);
 //   holes): seen through by an expanded view where its depth is observed
 //   (a warp), or by more than kFreeSpaceVotes times as many expanded views
 //   as have it on their surface.
+// With `planes`, a point on a fitted plane face of that layout (the floor,
+// a wall: Layout::PlaneFaceAt within `plane_tolerance`) is empty only when
+// a frame sees through it: a plane fitted through many seen points is
+// stronger evidence than a camera's clearance ball (the floor below a
+// camera lies in it, out of its view) or an expanded view, whose warped
+// depth grazes the floor at a slant.
 std::vector<std::uint8_t> InFreeSpace(const std::vector<SeenDepth>& frames,
                                       const std::vector<SeenDepth>& expanded,
-                                      const float* xyz, std::size_t count);
+                                      const float* xyz, std::size_t count,
+                                      const Layout* planes = nullptr,
+                                      float plane_tolerance = 0);
 
 }  // namespace pano4d

@@ -149,6 +149,24 @@ std::optional<Layout::Hit> Layout::Exit(
   return Hit{t_far, face};
 }
 
+std::optional<int> Layout::PlaneFaceAt(const Eigen::Vector3f& point,
+                                       float tolerance) const {
+  if (!valid) return std::nullopt;
+  const Eigen::Vector3f q = axes.transpose() * point;
+  const auto inside = [&](int j) {
+    return q[j] >= lo[j] - tolerance && q[j] <= hi[j] + tolerance;
+  };
+  for (int face = 0; face < 6; ++face) {
+    const int j = face / 2;
+    if (!on_plane[face]) continue;
+    const float at = face % 2 ? hi[j] : lo[j];
+    if (std::abs(q[j] - at) <= tolerance && inside((j + 1) % 3) &&
+        inside((j + 2) % 3))
+      return face;
+  }
+  return std::nullopt;
+}
+
 Layout FitLayout(const PointCloud& cloud,
                  const std::vector<Eigen::Vector3f>& viewpoints, float margin) {
   Layout layout;

@@ -41,6 +41,13 @@ struct Layout {
   };
   std::optional<Hit> Exit(const Eigen::Vector3f& origin,
                           const Eigen::Vector3f& direction) const;
+
+  // The face on a fitted plane that `point` lies on: within `tolerance`
+  // (world units) of the face, and inside the box, with that tolerance to
+  // spare, along the two other axes. nullopt when it lies on no plane face,
+  // or when invalid.
+  std::optional<int> PlaneFaceAt(const Eigen::Vector3f& point,
+                                 float tolerance) const;
 };
 
 // The layout of a static point cloud (RGB in [0, 1]) seen from

@@ -251,20 +251,27 @@ TEST(ExpansionTest, TheLayoutShellCoversWhatNoFrameSawAndNothingSeen) {
   EXPECT_EQ(trainer->scene().statics.size(),
             before + static_cast<std::size_t>(shell.gaussians));
 
+  // The frames saw one wall, a fitted plane: the shell continues it past
+  // their edges, where the tails of its Gaussians just outside a frame
+  // reach into that frame's border (the plane's colour on the plane,
+  // which the frame's loss then corrects); inside, the view renders as
+  // before.
   const TrainingView& front = trainer->views()[1];
   const RenderOutput front_after = render(front.camera);
+  constexpr int kBorder = 6;  // pixels: 3 sigma of a shell Gaussian here
   double seen_change = 0;
   std::size_t seen = 0;
-  for (std::size_t p = 0; p < front.depth.size(); ++p) {
-    if (!(front.depth[p] > 0)) continue;
-    ++seen;
-    for (int k = 0; k < 3; ++k)
-      seen_change +=
-          std::abs(front_after.rgb[3 * p + k] - front_before.rgb[3 * p + k]);
+  for (int y = kBorder; y < kHeight - kBorder; ++y) {
+    for (int x = kBorder; x < kWidth - kBorder; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * kWidth + x;
+      if (!(front.depth[p] > 0)) continue;
+      ++seen;
+      for (int k = 0; k < 3; ++k)
+        seen_change +=
+            std::abs(front_after.rgb[3 * p + k] - front_before.rgb[3 * p + k]);
+    }
   }
-  ASSERT_GT(seen, front.depth.size() / 2);
-  // What is left is the tails of shell Gaussians just past the frame's
-  // edge (0.023 with no reach kept).
+  ASSERT_GT(seen, front.depth.size() / 4);
   EXPECT_LT(seen_change / (3 * seen), 3e-3);
   const RenderOutput back_after = render(back);
   const auto mean_alpha = [](const RenderOutput& out) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.h"
+#include "src/pano/layout.h"
 #include "src/render/bench_scene.h"
 
 namespace pano4d {
@@ -186,6 +187,45 @@ TEST(FreeSpaceTest, TheSpaceAroundAVideoCameraIsEmptyUnlessAFrameSawASurface) {
   frame.clearance = 0;
   empty = InFreeSpace({frame}, {}, xyz.data(), points.size());
   EXPECT_EQ(empty, (std::vector<std::uint8_t>{0, 0, 0, 0}));
+}
+
+// The floor below a camera lies in its clearance ball, out of its view: on
+// a fitted plane only a frame that sees through a point empties it.
+TEST(FreeSpaceTest, AFittedPlaneIsEmptyOnlyWhereAFrameSeesThroughIt) {
+  const cv::Mat wall(kHeight, kWidth, CV_32FC1, 4.0f);
+  SeenDepth frame = MakeSeenDepth(Camera(), wall);
+  frame.clearance = CameraClearance(wall);
+  const Eigen::Vector3f through = At(20, 25, 3.0f);  // 25% before the wall
+  const float floor_y = through.y();                 // image y points down
+  Layout layout;
+  layout.valid = true;
+  layout.lo = Eigen::Vector3f(-5, -3, -5);
+  layout.hi = Eigen::Vector3f(5, floor_y, 8);
+  layout.on_plane[3] = true;  // +y: the floor
+  const std::vector<Eigen::Vector3f> points = {
+      {0.0f, floor_y, 0.3f},         // on the floor, below the camera
+      through,                       // on the floor, seen through
+      {0.0f, floor_y - 0.5f, 0.3f},  // in the ball, above the floor
+      {0.0f, floor_y, 6.0f}};        // on the floor behind the wall
+  ASSERT_LT(points[0].norm(), frame.clearance);
+  ASSERT_EQ(Look({frame}, points[0]), Sight::kUnseen);
+  std::vector<float> xyz;
+  for (const Eigen::Vector3f& p : points)
+    xyz.insert(xyz.end(), p.data(), p.data() + 3);
+  EXPECT_EQ(InFreeSpace({frame}, {}, xyz.data(), points.size()),
+            (std::vector<std::uint8_t>{1, 1, 1, 0}));
+  EXPECT_EQ(InFreeSpace({frame}, {}, xyz.data(), points.size(), &layout, 0.05f),
+            (std::vector<std::uint8_t>{0, 1, 1, 0}));
+  // Nor does an expanded view's warp that sees through the floor where no
+  // frame saw (a camera 2 behind the first point, looking at it), which
+  // empties it off the plane.
+  frame.clearance = 0;
+  RasterCamera behind = Camera();
+  behind.translation = -(points[0] - Eigen::Vector3f(0, 0, 2));
+  const SeenDepth warp = MakeSeenDepth(behind, wall);
+  ASSERT_EQ(Look({warp}, points[0]), Sight::kSeenThrough);
+  EXPECT_EQ(InFreeSpace({frame}, {warp}, xyz.data(), 1)[0], 1);
+  EXPECT_EQ(InFreeSpace({frame}, {warp}, xyz.data(), 1, &layout, 0.05f)[0], 0);
 }
 
 TEST(FreeSpaceTest, DepthOfAnotherSizeOrTypeIsAnError) {

@@ -143,6 +143,34 @@ TEST(LayoutTest, ASingleWallIsTheFaceBeyondTheCameras) {
   }
 }
 
+// The floor and the walls the frames saw are plane faces; a point is on
+// one within the tolerance and inside the box along the face's two other
+// axes, never on a face that is no plane or in the room's air.
+TEST(LayoutTest, APointOnTheFloorOrASeenWallIsOnAPlaneFace) {
+  const Eigen::Matrix3f r = Turn();
+  const Layout layout = FitLayout(SeenRoom(r));
+  ASSERT_TRUE(layout.valid);
+  const auto face_at = [&](const Eigen::Vector3f& room, float tolerance) {
+    return layout.PlaneFaceAt(r * room, tolerance);
+  };
+  const auto floor = face_at({0, 0, 0.02f}, 0.05f);
+  ASSERT_TRUE(floor.has_value());
+  EXPECT_TRUE(layout.on_plane[*floor]);
+  EXPECT_LT((layout.colours[*floor] - kFloor).norm(), 0.05f);
+  const auto back = face_at({1, 3.03f, 1.5f}, 0.05f);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_NE(*back, *floor);
+  EXPECT_EQ(face_at({0, 0, 0.02f}, 0.01f), std::nullopt);  // beyond tolerance
+  EXPECT_EQ(face_at({0, 0, 1.5f}, 0.05f), std::nullopt);   // mid-room
+  EXPECT_EQ(face_at({0, 0, 0}, 0.05f).value_or(-1), *floor);
+  EXPECT_EQ(face_at({0, 9, 0}, 0.05f), std::nullopt);  // the plane, outside
+  // The left wall (x = -3.45, where the points end) and the ceiling are
+  // no planes.
+  EXPECT_EQ(face_at({-3.45f, 0, 1.5f}, 0.1f), std::nullopt);
+  EXPECT_EQ(face_at({0, 0, 2.97f}, 0.1f), std::nullopt);
+  EXPECT_EQ(Layout().PlaneFaceAt(Eigen::Vector3f::Zero(), 1.0f), std::nullopt);
+}
+
 TEST(LayoutTest, RenderedDepthIsTheZDepthOfTheSurface) {
   const Eigen::Matrix3f r = Turn();
   const Layout layout = FitLayout(SeenRoom(r));
