@@ -147,8 +147,7 @@ class Expansion {
   // by none and seen through by a stored view's warp or by most stored
   // views; on a fitted plane of the layout (Layout::PlaneFaceAt, within
   // kOnPlaneSpacings of the shell's spacing), only when a training frame
-  // sees through it.
-  // Nothing before the first step. Returns the count.
+  // sees through it. Nothing before the first step. Returns the count.
   std::int64_t Carve(SceneEditor* fit);
   std::int64_t carved() const { return carved_; }
 
