@@ -129,12 +129,41 @@ PointCloud StaticSourcePoints(const std::vector<cv::Mat>& rgb,
   return cloud;
 }
 
-// The step's layout: fitted to the sources' static points, holding their
+// The static pixels of every training view with depth that lie past the
+// layout's box (Layout::Beyond), at every pixel: a wall the frames saw
+// only at their edges shows in a few hundred of them.
+PointCloud PointsBeyond(const Layout& layout,
+                        const std::vector<TrainingView>& views) {
+  PointCloud cloud;
+  if (!layout.valid) return cloud;
+  for (const TrainingView& v : views) {
+    if (v.depth.empty()) continue;
+    const RasterCamera& c = v.camera;
+    for (int y = 0; y < c.height; ++y) {
+      for (int x = 0; x < c.width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * c.width + x;
+        const float z = v.depth[i];
+        if (!(z > 0) || !std::isfinite(z)) continue;
+        if (!v.dynamic.empty() && v.dynamic[i]) continue;
+        const Eigen::Vector3f p = c.Unproject(x + 0.5f, y + 0.5f, z);
+        if (!layout.Beyond(p)) continue;
+        cloud.points.push_back(p);
+        cloud.colors.emplace_back(v.rgb[3 * i], v.rgb[3 * i + 1],
+                                  v.rgb[3 * i + 2]);
+      }
+    }
+  }
+  return cloud;
+}
+
+// The step's layout: fitted to the sources' static points, moved out to
+// the walls any training view saw in slivers, and holding the sources'
 // cameras with kLayoutCameraMargin x their median depth to spare.
 Layout SourceLayout(const std::vector<cv::Mat>& rgb,
                     const std::vector<cv::Mat>& depth_maps,
                     const std::vector<cv::Mat>& moving,
-                    const std::vector<RasterCamera>& cameras) {
+                    const std::vector<RasterCamera>& cameras,
+                    const std::vector<TrainingView>& views) {
   const PointCloud points =
       StaticSourcePoints(rgb, depth_maps, moving, cameras);
   std::vector<Eigen::Vector3f> centres;
@@ -150,7 +179,10 @@ Layout SourceLayout(const std::vector<cv::Mat>& rgb,
                            ? 0.0f
                            : static_cast<float>(kLayoutCameraMargin *
                                                 UpperMedian(std::move(depths)));
-  return FitLayout(points, centres, margin);
+  Layout layout = FitLayout(points, centres);
+  FitSliverWalls(PointsBeyond(layout, views), &layout);
+  HoldViewpoints(centres, margin, &layout);
+  return layout;
 }
 
 // Drops the points (and their depths) in known empty space (free_space.h).
@@ -439,7 +471,8 @@ void Expansion::Prepare(const SceneEditor& fit) {
       moving.push_back(v.dynamic.empty() ? cv::Mat() : MovingMask(v));
       cameras.push_back(v.camera);
     }
-    if (!cameras.empty()) layout_ = SourceLayout(rgb, depth, moving, cameras);
+    if (!cameras.empty())
+      layout_ = SourceLayout(rgb, depth, moving, cameras, views);
   }
   const std::filesystem::path frame_path = out_dir_ / "frame.json";
   if (last_step_ > 0) {
@@ -570,7 +603,8 @@ Expansion::StepSources Expansion::GatherSources(SceneEditor* fit, int e) {
     out.depth[s] = SourceDepth(fit, v, options_.warp_depth, &rendered);
     if (!v.dynamic.empty()) out.moving[s] = MovingMask(v);
   }
-  out.layout = SourceLayout(out.rgb, out.depth, out.moving, source_cameras);
+  out.layout =
+      SourceLayout(out.rgb, out.depth, out.moving, source_cameras, views);
   return out;
 }
 

@@ -167,14 +167,31 @@ std::optional<int> Layout::PlaneFaceAt(const Eigen::Vector3f& point,
   return std::nullopt;
 }
 
+bool Layout::Beyond(const Eigen::Vector3f& point) const {
+  if (!valid) return false;
+  const Eigen::Vector3f q = axes.transpose() * point;
+  bool past = false;
+  for (int face = 0; face < 6; ++face) {
+    const int j = face / 2;
+    const float at = face % 2 ? hi[j] : lo[j];
+    if (on_plane[face]) {
+      if (std::abs(q[j] - at) <= band) return false;
+    } else {
+      past = past || (face % 2 ? q[j] > at + band : q[j] < at - band);
+    }
+  }
+  return past;
+}
+
 Layout FitLayout(const PointCloud& cloud,
-                 const std::vector<Eigen::Vector3f>& viewpoints, float margin) {
+                 const std::vector<Eigen::Vector3f>& viewpoints) {
   Layout layout;
   if (cloud.size() < kLayoutMinPoints) return layout;
   const bool coloured = cloud.colors.size() == cloud.size();
   const double scale = RobustScale(cloud);
   if (!(scale > 0)) return layout;
   const double band = kPlaneTolerance * scale;
+  layout.band = static_cast<float>(band);
   const std::vector<Plane> planes = DominantPlanes(cloud, band);
   if (planes.empty()) return layout;
 
@@ -242,17 +259,78 @@ Layout FitLayout(const PointCloud& cloud,
       if (coloured) layout.colours[face] = MeanColour(cloud, &plane.inliers);
     }
   }
-  for (const Eigen::Vector3f& v : viewpoints) {
-    const Eigen::Vector3f q = layout.axes.transpose() * v;
-    for (int j = 0; j < 3; ++j) {
-      if (!layout.on_plane[2 * j])
-        layout.lo[j] = std::min(layout.lo[j], q[j] - margin);
-      if (!layout.on_plane[2 * j + 1])
-        layout.hi[j] = std::max(layout.hi[j], q[j] + margin);
-    }
-  }
   layout.valid = true;
   return layout;
+}
+
+void FitSliverWalls(const PointCloud& beyond, Layout* layout) {
+  if (!layout->valid) return;
+  const bool coloured = beyond.colors.size() == beyond.size();
+  const float band = layout->band;
+  struct Wall {
+    int face;
+    float at;
+    Eigen::Vector3f colour;
+  };
+  std::vector<Wall> walls;  // applied after every face is looked at, so
+                            // that Beyond sees the layout as fitted
+  for (int face = 0; face < 6; ++face) {
+    if (layout->on_plane[face]) continue;
+    const int j = face / 2;
+    const bool high = face % 2 == 1;
+    const float bound = high ? layout->hi[j] : layout->lo[j];
+    std::vector<std::pair<float, std::size_t>> past;  // (along axis j, index)
+    for (std::size_t i = 0; i < beyond.size(); ++i) {
+      const Eigen::Vector3f& p = beyond.points[i];
+      const float q = layout->axes.col(j).dot(p);
+      if ((high ? q > bound + band : q < bound - band) && layout->Beyond(p))
+        past.emplace_back(q, i);
+    }
+    if (past.size() < kSliverWallMinPoints) continue;
+    std::sort(past.begin(), past.end());
+    // The most points within one plane's band (a window two bands wide).
+    std::size_t first = 0, count = 0;
+    for (std::size_t a = 0, b = 0; b < past.size(); ++b) {
+      while (past[b].first - past[a].first > 2 * band) ++a;
+      if (b - a + 1 > count) {
+        count = b - a + 1;
+        first = a;
+      }
+    }
+    if (count < kSliverWallMinPoints ||
+        static_cast<double>(count) <
+            kSliverWallShare * static_cast<double>(past.size()))
+      continue;
+    Wall wall{face, past[first + count / 2].first, layout->mean_colour};
+    if (std::abs(wall.at - bound) < kSliverWallGapBands * band) continue;
+    if (coloured) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (std::size_t k = first; k < first + count; ++k)
+        sum += beyond.colors[past[k].second].cast<double>();
+      wall.colour = (sum / static_cast<double>(count)).cast<float>();
+    }
+    walls.push_back(wall);
+  }
+  for (const Wall& wall : walls) {
+    const int j = wall.face / 2;
+    (wall.face % 2 ? layout->hi : layout->lo)[j] = wall.at;
+    layout->on_plane[wall.face] = true;
+    layout->colours[wall.face] = wall.colour;
+  }
+}
+
+void HoldViewpoints(const std::vector<Eigen::Vector3f>& viewpoints,
+                    float margin, Layout* layout) {
+  if (!layout->valid) return;
+  for (const Eigen::Vector3f& v : viewpoints) {
+    const Eigen::Vector3f q = layout->axes.transpose() * v;
+    for (int j = 0; j < 3; ++j) {
+      if (!layout->on_plane[2 * j])
+        layout->lo[j] = std::min(layout->lo[j], q[j] - margin);
+      if (!layout->on_plane[2 * j + 1])
+        layout->hi[j] = std::max(layout->hi[j], q[j] + margin);
+    }
+  }
 }
 
 void RenderLayout(const Layout& layout, const RasterCamera& camera,

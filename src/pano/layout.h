@@ -31,6 +31,9 @@ struct Layout {
   std::array<Eigen::Vector3f, 6> colours{};
   std::array<bool, 6> on_plane{};  // the face lies on a fitted plane
   Eigen::Vector3f mean_colour = Eigen::Vector3f::Constant(0.5f);
+  // The planes' inlier band (world units): how far a point may lie off a
+  // plane and still be on it.
+  float band = 0;
 
   // Where the ray origin + t direction leaves the box (t > 0; with an
   // unnormalised direction, t is in its units): the exit from inside, the
@@ -48,6 +51,12 @@ struct Layout {
   // or when invalid.
   std::optional<int> PlaneFaceAt(const Eigen::Vector3f& point,
                                  float tolerance) const;
+
+  // Whether `point` lies past a face that is no plane, by more than the
+  // band, and off every plane face's plane (the floor runs on beyond the
+  // box): where a wall that frames saw only in slivers stands
+  // (FitSliverWalls). False when invalid.
+  bool Beyond(const Eigen::Vector3f& point) const;
 };
 
 // The layout of a static point cloud (RGB in [0, 1]) seen from
@@ -56,14 +65,28 @@ struct Layout {
 // near-orthogonal one (else the points' principal direction), its extent
 // the points' 1st to 99th percentile along each axis, widened to take in a
 // plane that is a face (a plane within its RANSAC band of both bounds, as
-// one wall seen head-on, bounds the side away from the viewpoints), and,
-// on faces that are no plane, to hold every viewpoint with `margin` (world
-// units) to spare: the cameras stood inside the scene, so its walls lie
-// behind them too. Invalid (valid = false) for fewer than kLayoutMinPoints
-// points or a cloud with no plane.
+// one wall seen head-on, bounds the side away from the viewpoints).
+// Invalid (valid = false) for fewer than kLayoutMinPoints points or a cloud
+// with no plane.
 Layout FitLayout(const PointCloud& cloud,
-                 const std::vector<Eigen::Vector3f>& viewpoints = {},
-                 float margin = 0);
+                 const std::vector<Eigen::Vector3f>& viewpoints = {});
+
+// Moves each face that is no plane to the wall standing past it that the
+// frames saw only at their edges, too few points for a plane of the
+// layout's cloud: `beyond` holds the points seen there (Layout::Beyond; the
+// caller gathers them densely, at every pixel). When at least
+// kSliverWallMinPoints of those past one face, and at least
+// kSliverWallShare of them, lie within the band of one plane normal to its
+// axis, kSliverWallGapBands or more past the face, the face moves to that
+// plane, is a plane face, and takes their mean
+// colour. No-op for an invalid layout.
+void FitSliverWalls(const PointCloud& beyond, Layout* layout);
+
+// Widens the faces that are no plane to hold every viewpoint with `margin`
+// (world units) to spare: the cameras stood inside the scene, so its walls
+// lie behind them too. No-op for an invalid layout.
+void HoldViewpoints(const std::vector<Eigen::Vector3f>& viewpoints,
+                    float margin, Layout* layout);
 
 // The layout seen from a camera: z-depth (CV_32FC1, 0 where the ray misses
 // the box or the layout is invalid) and colour (CV_32FC3, RGB).
@@ -78,5 +101,14 @@ PointCloud SampleLayoutFaces(const Layout& layout, float spacing);
 // Below this many points the box is not fitted: percentiles and planes of
 // a few dozen points say little about a room.
 inline constexpr std::size_t kLayoutMinPoints = 200;
+// A sliver wall needs this many points (at every pixel: a strip of some
+// 3 x 10 pixels) holding this share of those past its face: fewer, or a
+// spread along the axis, are stray depth or furniture, not a wall.
+inline constexpr std::size_t kSliverWallMinPoints = 32;
+inline constexpr double kSliverWallShare = 0.5;
+// ... and must lie at least this many bands past the face: points just past
+// it are the cloud's own tail (the side of a box standing a little taller
+// than the 99th percentile), not a wall.
+inline constexpr float kSliverWallGapBands = 4;
 
 }  // namespace pano4d

@@ -101,7 +101,8 @@ TEST(LayoutTest, TheBoxHoldsTheCamerasOnFacesThatAreNoPlane) {
   const Eigen::Matrix3f r = Turn();
   const Eigen::Vector3f eye = r * Eigen::Vector3f(0, -2.5f, 1.5f);
   const Layout plain = FitLayout(SeenRoom(r));
-  const Layout held = FitLayout(SeenRoom(r), {eye}, 0.5f);
+  Layout held = FitLayout(SeenRoom(r), {eye});
+  HoldViewpoints({eye}, 0.5f, &held);
   ASSERT_TRUE(plain.valid && held.valid);
   const Eigen::Vector3f back = r * Eigen::Vector3f(0, -1, 0);
   const Eigen::Vector3f down = r * Eigen::Vector3f(0, 0, -1);
@@ -133,7 +134,8 @@ TEST(LayoutTest, ASingleWallIsTheFaceBeyondTheCameras) {
   }
   for (const float eye_z : {0.0f, 6.0f}) {  // in front of it, then behind
     const Eigen::Vector3f eye(0.1f, 0, eye_z);
-    const Layout layout = FitLayout(wall, {eye}, 0.5f);
+    Layout layout = FitLayout(wall, {eye});
+    HoldViewpoints({eye}, 0.5f, &layout);
     ASSERT_TRUE(layout.valid);
     const auto hit = layout.Exit(eye, (Eigen::Vector3f(0, 0, 3) - eye));
     ASSERT_TRUE(hit);
@@ -169,6 +171,86 @@ TEST(LayoutTest, APointOnTheFloorOrASeenWallIsOnAPlaneFace) {
   EXPECT_EQ(face_at({-3.45f, 0, 1.5f}, 0.1f), std::nullopt);
   EXPECT_EQ(face_at({0, 0, 2.97f}, 0.1f), std::nullopt);
   EXPECT_EQ(Layout().PlaneFaceAt(Eigen::Vector3f::Zero(), 1.0f), std::nullopt);
+}
+
+// The left wall (x = -4) of SeenRoom, which frames saw only in a strip at
+// their edges: too few points for a plane of the layout's cloud, but
+// enough, gathered at every pixel, to move the face that is no plane out
+// to the wall, in the wall's colour. Stray points or too few leave it.
+TEST(LayoutTest, AWallSeenInSliversMovesItsFaceOutToIt) {
+  const Eigen::Matrix3f r = Turn();
+  const Layout fitted = FitLayout(SeenRoom(r));
+  ASSERT_TRUE(fitted.valid);
+  const Eigen::Vector3f eye = r * Eigen::Vector3f(0, 0, 1.5f);
+  const Eigen::Vector3f left = r * Eigen::Vector3f(-1, 0, 0);
+  const int face = fitted.Exit(eye, left)->face;
+  ASSERT_FALSE(fitted.on_plane[face]);
+  EXPECT_NEAR(fitted.Exit(eye, left)->t, 3.45f, 0.1f);
+
+  std::mt19937 rng(3);
+  const auto u = [&](float lo, float hi) {
+    return std::uniform_real_distribution<float>(lo, hi)(rng);
+  };
+  std::normal_distribution<float> noise(0, 0.01f);
+  const Eigen::Vector3f kSliver(0.3f, 0.2f, 0.15f);
+  const auto add = [&](PointCloud* cloud, const Eigen::Vector3f& room,
+                       const Eigen::Vector3f& colour) {
+    cloud->points.push_back(r * room);
+    cloud->colors.push_back(colour);
+  };
+  PointCloud beyond;
+  for (int i = 0; i < 60; ++i)  // a strip 0.2 m wide, 1.5 m high
+    add(&beyond, {-4 + noise(rng), u(-1, -0.8f), u(0.5f, 2)}, kSliver);
+  for (int i = 0; i < 200; ++i)  // the floor running on past the box
+    add(&beyond, {u(-4, -3.6f), u(-2, 3), noise(rng)}, kFloor);
+  for (int i = 0; i < 20; ++i)  // stray depth, off the wall's band
+    add(&beyond, {u(-3.75f, -3.55f), u(-2, 3), u(0.5f, 2.5f)}, kClutter);
+  EXPECT_TRUE(fitted.Beyond(beyond.points[0]));
+  EXPECT_FALSE(fitted.Beyond(beyond.points[60]));  // on the floor's plane
+  EXPECT_FALSE(fitted.Beyond(eye));
+
+  Layout moved = fitted;
+  FitSliverWalls(beyond, &moved);
+  EXPECT_TRUE(moved.on_plane[face]);
+  EXPECT_NEAR(moved.Exit(eye, left)->t, 4.0f, 0.02f);
+  EXPECT_LT((moved.colours[face] - kSliver).norm(), 1e-3f);
+  // Every other face as it was.
+  for (int f = 0; f < 6; ++f) {
+    if (f == face) continue;
+    EXPECT_EQ(moved.on_plane[f], fitted.on_plane[f]) << "face " << f;
+    EXPECT_EQ(moved.colours[f], fitted.colours[f]) << "face " << f;
+  }
+
+  // Too few wall points, or stray depth spread along the axis: nothing
+  // moves.
+  for (const bool wall : {true, false}) {
+    PointCloud few;
+    for (int i = 0; i < 20 && wall; ++i)
+      add(&few, {-4 + noise(rng), u(-1, -0.8f), u(0.5f, 2)}, kSliver);
+    for (int i = 0; i < 40 && !wall; ++i)
+      add(&few, {u(-4, -3.55f), u(-2, 3), u(0.5f, 2.5f)}, kClutter);
+    Layout same = fitted;
+    FitSliverWalls(few, &same);
+    EXPECT_FALSE(same.on_plane[face]) << (wall ? "20 wall points" : "stray");
+    EXPECT_NEAR(same.Exit(eye, left)->t, fitted.Exit(eye, left)->t, 1e-6f);
+  }
+
+  // The top of a box standing a little taller than the points' 99th
+  // percentile, two bands past the face that is no plane: the cloud's own
+  // tail, no ceiling.
+  const Eigen::Vector3f up = r * Eigen::Vector3f(0, 0, 1);
+  const int top = fitted.Exit(eye, up)->face;
+  ASSERT_FALSE(fitted.on_plane[top]);
+  const float top_z = 1.5f + fitted.Exit(eye, up)->t;
+  PointCloud tall;
+  for (int i = 0; i < 60; ++i)
+    add(&tall, {u(-0.3f, 0.3f), u(0.7f, 1.3f), top_z + 2 * fitted.band},
+        kClutter);
+  ASSERT_TRUE(fitted.Beyond(tall.points[0]));
+  Layout same = fitted;
+  FitSliverWalls(tall, &same);
+  EXPECT_FALSE(same.on_plane[top]);
+  EXPECT_NEAR(same.Exit(eye, up)->t, fitted.Exit(eye, up)->t, 1e-6f);
 }
 
 TEST(LayoutTest, RenderedDepthIsTheZDepthOfTheSurface) {
