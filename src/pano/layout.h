@@ -78,8 +78,8 @@ Layout FitLayout(const PointCloud& cloud,
 // kSliverWallMinPoints of those past one face, and at least
 // kSliverWallShare of them, lie within the band of one plane normal to its
 // axis, kSliverWallGapBands or more past the face, the face moves to that
-// plane, is a plane face, and takes their mean
-// colour. No-op for an invalid layout.
+// plane, is a plane face, and takes their mean colour. No-op for an invalid
+// layout.
 void FitSliverWalls(const PointCloud& beyond, Layout* layout);
 
 // Widens the faces that are no plane to hold every viewpoint with `margin`
