@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -272,8 +273,10 @@ void FitSliverWalls(const PointCloud& beyond, Layout* layout) {
     float at;
     Eigen::Vector3f colour;
   };
-  std::vector<Wall> walls;  // applied after every face is looked at, so
-                            // that Beyond sees the layout as fitted
+  std::vector<std::uint8_t> past_box(beyond.size());  // Layout::Beyond, once
+  for (std::size_t i = 0; i < beyond.size(); ++i)
+    past_box[i] = layout->Beyond(beyond.points[i]);
+  std::vector<Wall> walls;  // applied after every face is looked at
   for (int face = 0; face < 6; ++face) {
     if (layout->on_plane[face]) continue;
     const int j = face / 2;
@@ -283,7 +286,7 @@ void FitSliverWalls(const PointCloud& beyond, Layout* layout) {
     for (std::size_t i = 0; i < beyond.size(); ++i) {
       const Eigen::Vector3f& p = beyond.points[i];
       const float q = layout->axes.col(j).dot(p);
-      if ((high ? q > bound + band : q < bound - band) && layout->Beyond(p))
+      if (past_box[i] && (high ? q > bound + band : q < bound - band))
         past.emplace_back(q, i);
     }
     if (past.size() < kSliverWallMinPoints) continue;
@@ -304,10 +307,10 @@ void FitSliverWalls(const PointCloud& beyond, Layout* layout) {
     Wall wall{face, past[first + count / 2].first, layout->mean_colour};
     if (std::abs(wall.at - bound) < kSliverWallGapBands * band) continue;
     if (coloured) {
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      std::vector<std::size_t> on_wall;
       for (std::size_t k = first; k < first + count; ++k)
-        sum += beyond.colors[past[k].second].cast<double>();
-      wall.colour = (sum / static_cast<double>(count)).cast<float>();
+        on_wall.push_back(past[k].second);
+      wall.colour = MeanColour(beyond, &on_wall);
     }
     walls.push_back(wall);
   }
