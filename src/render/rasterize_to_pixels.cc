@@ -160,10 +160,13 @@ namespace {
 constexpr int kPer = 10;
 
 // One tile of the backward: its pixels' state, restored from the forward's
-// and walked back to front, and each lane's share of the current Gaussian's
-// gradient. Local arrays of the tile loop, passed to inlined functions: as
-// members of one struct the compiler could not tell the rows apart, and the
-// lane loops did not vectorise (a 4x slower backward, measured).
+// and walked back to front, and each lane slot's share of the current
+// Gaussian's gradient: kLaneGroup slots, each summing its lane of every
+// group the Gaussian's box covers. As wide as a group rather than a tile
+// row, so that a small Gaussian clears and reduces 80 sums, not 160. Local
+// arrays of the tile loop, passed to inlined functions: as members of one
+// struct the compiler could not tell the rows apart, and the lane loops did not
+// vectorise (a 4x slower backward, measured).
 template <typename T>
 struct BackwardPixels {
   T* t;
@@ -173,7 +176,7 @@ struct BackwardPixels {
   T (*dc)[kTileSize * kTileSize];
   T (*behind)[kTileSize * kTileSize];
   T* behind_depth;
-  T (*lane_sum)[kTileSize];
+  T (*lane_sum)[kLaneGroup];
   std::uint32_t* last;
 };
 
@@ -234,13 +237,13 @@ template <typename T>
     *d_accumulated = b.d_accumulated, *behind_depth = b.behind_depth;
   T(*dc)[kTileSize * kTileSize] = b.dc;
   T(*behind)[kTileSize * kTileSize] = b.behind;
-  T(*lane_sum)[kTileSize] = b.lane_sum;
+  T(*lane_sum)[kLaneGroup] = b.lane_sum;
   const std::uint32_t* last = b.last;
   const T gx = p.x[g], ca = p.conic_a[g], cb = p.conic_b[g], cc = p.conic_c[g];
   const T op = p.opacity[g], z = p.depth[g];
   const T red = p.r[g], green = p.g[g], blue = p.b[g];
   for (int f = 0; f < kPer; ++f)
-    std::fill(lane_sum[f], lane_sum[f] + kTileSize, T(0));
+    std::fill(lane_sum[f], lane_sum[f] + kLaneGroup, T(0));
   for (int py = box.y0; py <= box.y1; ++py) {
     const T dy = py + T(0.5) - p.y[g];
     const ConicRow<T> conic(ca, cb, cc, dy);
@@ -274,11 +277,11 @@ template <typename T>
             MulAdd(before * (green - rbg[lane]), rdg[lane], d_alpha_all);
         d_alpha_all =
             MulAdd(before * (blue - rbb[lane]), rdb[lane], d_alpha_all);
-        T* sum = &lane_sum[0][lane0 + lane];
-        sum[6 * kTileSize] = MulAdd(w, rdr[lane], sum[6 * kTileSize]);
-        sum[7 * kTileSize] = MulAdd(w, rdg[lane], sum[7 * kTileSize]);
-        sum[8 * kTileSize] = MulAdd(w, rdb[lane], sum[8 * kTileSize]);
-        sum[9 * kTileSize] = MulAdd(w, rad[lane], sum[9 * kTileSize]);
+        T* sum = &lane_sum[0][lane];
+        sum[6 * kLaneGroup] = MulAdd(w, rdr[lane], sum[6 * kLaneGroup]);
+        sum[7 * kLaneGroup] = MulAdd(w, rdg[lane], sum[7 * kLaneGroup]);
+        sum[8 * kLaneGroup] = MulAdd(w, rdb[lane], sum[8 * kLaneGroup]);
+        sum[9 * kLaneGroup] = MulAdd(w, rad[lane], sum[9 * kLaneGroup]);
         rbr[lane] = MulAdd(alpha, red, keep * rbr[lane]);
         rbg[lane] = MulAdd(alpha, green, keep * rbg[lane]);
         rbb[lane] = MulAdd(alpha, blue, keep * rbb[lane]);
@@ -288,21 +291,21 @@ template <typename T>
         const T d_alpha = alpha > T(0) ? d_alpha_all : T(0);
         const T d_raw = a.raw <= T(kMaxAlpha) ? d_alpha : T(0);
         const T d_power = a.raw * d_raw;
-        sum[5 * kTileSize] = MulAdd(a.gauss, d_raw, sum[5 * kTileSize]);
-        sum[2 * kTileSize] =
-            MulAdd(-T(0.5) * dx * dx, d_power, sum[2 * kTileSize]);
-        sum[3 * kTileSize] = MulAdd(-dx * dy, d_power, sum[3 * kTileSize]);
-        sum[4 * kTileSize] =
-            MulAdd(-T(0.5) * dy * dy, d_power, sum[4 * kTileSize]);
+        sum[5 * kLaneGroup] = MulAdd(a.gauss, d_raw, sum[5 * kLaneGroup]);
+        sum[2 * kLaneGroup] =
+            MulAdd(-T(0.5) * dx * dx, d_power, sum[2 * kLaneGroup]);
+        sum[3 * kLaneGroup] = MulAdd(-dx * dy, d_power, sum[3 * kLaneGroup]);
+        sum[4 * kLaneGroup] =
+            MulAdd(-T(0.5) * dy * dy, d_power, sum[4 * kLaneGroup]);
         sum[0] = MulAdd(MulAdd(ca, dx, cb * dy), d_power, sum[0]);
-        sum[kTileSize] =
-            MulAdd(MulAdd(cc, dy, cb * dx), d_power, sum[kTileSize]);
+        sum[kLaneGroup] =
+            MulAdd(MulAdd(cc, dy, cb * dx), d_power, sum[kLaneGroup]);
       }
     }
   }
   for (int f = 0; f < kPer; ++f) {
     T sum = 0;
-    for (int lane = 0; lane < kTileSize; ++lane) sum += lane_sum[f][lane];
+    for (int lane = 0; lane < kLaneGroup; ++lane) sum += lane_sum[f][lane];
     e[f] = sum;
   }
 }
@@ -357,9 +360,9 @@ std::uint64_t RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
   // the pixels of its box (BoxInTile) whose last contributor lies beyond it,
   // so every pixel sees the same Gaussians in reverse order as a pixel-major
   // walk would. Lane groups are branch-free loops, as in the forward; each
-  // lane sums its own share of the Gaussian's gradient and the lanes are
-  // added in a fixed order. A tile's entries are its own: tiles run in
-  // parallel without sharing a gradient slot.
+  // lane slot sums its share of the Gaussian's gradient over the box's
+  // groups and the slots are added in a fixed order. A tile's entries are its
+  // own: tiles run in parallel without sharing a gradient slot.
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : evaluations)
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
     constexpr int kTilePixels = kTileSize * kTileSize;
@@ -367,7 +370,7 @@ std::uint64_t RasterizeToPixelsBackward(const RasterSettingsT<T>& settings,
         d_acc_depth[kTilePixels], d_accumulated[kTilePixels];
     alignas(64) T dc[3][kTilePixels], behind[3][kTilePixels],
         behind_depth[kTilePixels];
-    alignas(64) T lane_sum[kPer][kTileSize];
+    alignas(64) T lane_sum[kPer][kLaneGroup];
     alignas(64) std::uint32_t last[kTilePixels];
     const BackwardPixels<T> b{t,   t_final, d_acc_depth,  d_accumulated,
                               dc,  behind,  behind_depth, lane_sum,
@@ -448,7 +451,7 @@ std::uint64_t ProbeBackward(const ProjectedGaussiansT<float>& p,
       d_acc_depth[kTilePixels], d_accumulated[kTilePixels];
   alignas(64) float dc[3][kTilePixels], behind[3][kTilePixels],
       behind_depth[kTilePixels];
-  alignas(64) float lane_sum[kPer][kTileSize];
+  alignas(64) float lane_sum[kPer][kLaneGroup];
   alignas(64) std::uint32_t last[kTilePixels];
   const BackwardPixels<float> b{t,   t_final, d_acc_depth,  d_accumulated,
                                 dc,  behind,  behind_depth, lane_sum,
